@@ -1,0 +1,1 @@
+"""Stable-baselines3 baselines (imported as ``rigid_gym.agents``)."""

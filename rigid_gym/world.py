@@ -1,0 +1,360 @@
+"""World: the state arrays of one or many copies of a scene, step(), and queries.
+
+    world = rg.World(scene, dt=1/240)                  # arrays (n, 3), (n, 4) ...
+    world = rg.World(scene, dt=1/240, num_worlds=256)  # arrays (256, n, 3), (256, n, 4) ...
+    world.step(240)
+
+State is held per body at the centre of mass in the principal frame (see ``rigid_gym.scene``).
+Every array has a leading world axis internally; a world built without ``num_worlds`` shows it
+dropped. Arrays returned by properties are read-only views: change state with the setters,
+which validate their input.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from rigid_gym import pipeline
+from rigid_gym import quaternion as quat
+from rigid_gym.config import SolverConfig
+from rigid_gym.kernels import integrate
+from rigid_gym.kernels.integrate import DYNAMIC, STATIC
+from rigid_gym.scene import Scene
+
+
+class State(NamedTuple):
+    """Everything that changes during a step. B worlds, n bodies, float64.
+
+    position (B, n, 3) m; orientation (B, n, 4) (w, x, y, z); velocity (B, n, 3) m/s;
+    angular_momentum (B, n, 3) kg m^2/s about the centre of mass, world frame;
+    angular_velocity (B, n, 3) rad/s (derived from L for dynamic bodies, set for kinematic);
+    rotation (B, n, 3, 3) R(q), derived; force (B, n, 3) N and torque (B, n, 3) N m applied
+    during the next step and then cleared.
+    """
+
+    position: np.ndarray
+    orientation: np.ndarray
+    velocity: np.ndarray
+    angular_momentum: np.ndarray
+    angular_velocity: np.ndarray
+    rotation: np.ndarray
+    force: np.ndarray
+    torque: np.ndarray
+
+
+class Model(NamedTuple):
+    """What stays fixed while stepping.
+
+    motion (n,) int32 STATIC/KINEMATIC/DYNAMIC; inverse_mass (B, n) 1/kg;
+    inverse_moments (B, n, 3) principal 1/kg m^2; gravity (3,) m/s^2.
+    Mass properties carry a world axis so they can differ between worlds.
+    """
+
+    motion: np.ndarray
+    inverse_mass: np.ndarray
+    inverse_moments: np.ndarray
+    gravity: np.ndarray
+
+
+class World:
+    """A scene being simulated with a fixed time step ``dt`` (s).
+
+    num_worlds: None for one world (arrays without the world axis) or B >= 1 identical copies
+        stepped together (arrays with a leading axis of length B).
+    config: a SolverConfig; default ``SolverConfig.for_scene(scene)``.
+    """
+
+    def __init__(self, scene: Scene, dt: float = 1.0 / 240.0, num_worlds: int | None = None,
+                 config: SolverConfig | None = None):
+        if not isinstance(scene, Scene):
+            raise ValueError(f"World: scene must be a rigid_gym.Scene, got {type(scene).__name__}")
+        if len(scene) == 0:
+            raise ValueError("World: the scene has no bodies")
+        try:
+            dt = float(dt)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"World.dt: expected a number of seconds, got {dt!r}") from exc
+        if not np.isfinite(dt) or dt <= 0.0:
+            raise ValueError(f"World.dt: must be finite and > 0 s, got {dt!r}")
+        if num_worlds is not None and (
+            isinstance(num_worlds, bool) or not isinstance(num_worlds, (int, np.integer))
+            or num_worlds < 1
+        ):
+            raise ValueError(f"World.num_worlds: must be None or an int >= 1, got {num_worlds!r}")
+        self.scene = scene
+        self.dt = dt
+        self.batched = num_worlds is not None
+        self.num_worlds = int(num_worlds) if self.batched else 1
+        self.config = SolverConfig.for_scene(scene) if config is None else config
+        self.model = _build_model(scene, self.num_worlds)
+        self.state = _build_state(scene, self.num_worlds)
+        self._refresh_derived()
+        self._initial_state = tuple(a.copy() for a in self.state)
+        self.steps = 0
+        self._profile = pipeline.Profile()
+
+    # -- stepping ----------------------------------------------------------------------------
+
+    def step(self, n: int = 1) -> None:
+        """Advance every world by ``n`` steps of ``dt``. Forces and torques set with
+        ``apply_force``/``apply_torque`` act during the next step only."""
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
+            raise ValueError(f"World.step: n must be an int >= 0, got {n!r}")
+        for _ in range(int(n)):
+            pipeline.step(self.state, self.model, self.config, self.dt, self._profile)
+            self.state.force.fill(0.0)
+            self.state.torque.fill(0.0)
+            self.steps += 1
+
+    def reset(self) -> None:
+        """Put every world back to the scene's initial state (time 0)."""
+        for current, initial in zip(self.state, self._initial_state):
+            current[...] = initial
+        self.steps = 0
+
+    @property
+    def time(self) -> float:
+        """Simulated time, s (steps * dt)."""
+        return self.steps * self.dt
+
+    # -- state views -------------------------------------------------------------------------
+
+    def _view(self, arr: np.ndarray) -> np.ndarray:
+        view = arr.view() if self.batched else arr[0]
+        view.flags.writeable = False
+        return view
+
+    @property
+    def position(self) -> np.ndarray:
+        """([B,] n, 3) centre-of-mass positions, m."""
+        return self._view(self.state.position)
+
+    @property
+    def orientation(self) -> np.ndarray:
+        """([B,] n, 4) unit quaternions (w, x, y, z) of the principal body frames."""
+        return self._view(self.state.orientation)
+
+    @property
+    def velocity(self) -> np.ndarray:
+        """([B,] n, 3) centre-of-mass velocities, m/s."""
+        return self._view(self.state.velocity)
+
+    @property
+    def angular_velocity(self) -> np.ndarray:
+        """([B,] n, 3) angular velocities, rad/s, world frame."""
+        return self._view(self.state.angular_velocity)
+
+    @property
+    def body_angular_momentum(self) -> np.ndarray:
+        """([B,] n, 3) angular momentum of each body about its centre of mass, kg m^2/s."""
+        return self._view(self.state.angular_momentum)
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """([B,] n, 3, 3) rotation matrices of the orientations."""
+        return self._view(self.state.rotation)
+
+    # -- queries -----------------------------------------------------------------------------
+
+    def _per_world(self, values: np.ndarray):
+        return values if self.batched else float(values[0])
+
+    def kinetic_energy(self):
+        """Total kinetic energy of the dynamic bodies, J: float, or (B,) when batched."""
+        dynamic = self.model.motion == DYNAMIC
+        s = self.state
+        mass = _safe_inverse(self.model.inverse_mass)[:, dynamic]
+        linear = 0.5 * np.sum(mass * np.sum(s.velocity[:, dynamic] ** 2, axis=-1), axis=-1)
+        angular = 0.5 * np.sum(s.angular_momentum[:, dynamic] * s.angular_velocity[:, dynamic],
+                               axis=(-1, -2))
+        return self._per_world(linear + angular)
+
+    def potential_energy(self):
+        """Gravitational potential energy of the dynamic bodies, J, zero at the origin."""
+        dynamic = self.model.motion == DYNAMIC
+        mass = _safe_inverse(self.model.inverse_mass)[:, dynamic]
+        height = -self.state.position[:, dynamic] @ self.model.gravity
+        return self._per_world(np.sum(mass * height, axis=-1))
+
+    def linear_momentum(self) -> np.ndarray:
+        """Total linear momentum of the dynamic bodies, kg m/s: ([B,] 3)."""
+        dynamic = self.model.motion == DYNAMIC
+        mass = _safe_inverse(self.model.inverse_mass)[:, dynamic]
+        p = np.sum(mass[..., None] * self.state.velocity[:, dynamic], axis=1)
+        return p if self.batched else p[0]
+
+    def angular_momentum(self) -> np.ndarray:
+        """Total angular momentum of the dynamic bodies about the world origin, kg m^2/s:
+        ([B,] 3) = sum of X x M V + L."""
+        dynamic = self.model.motion == DYNAMIC
+        s = self.state
+        mass = _safe_inverse(self.model.inverse_mass)[:, dynamic]
+        orbital = np.cross(s.position[:, dynamic], mass[..., None] * s.velocity[:, dynamic])
+        total = np.sum(orbital + s.angular_momentum[:, dynamic], axis=1)
+        return total if self.batched else total[0]
+
+    def profile(self) -> dict[str, dict]:
+        """Per phase, in step order: whether it runs, total seconds and calls so far."""
+        return {
+            name: {"on": on, "seconds": self._profile.seconds.get(name, 0.0),
+                   "calls": self._profile.calls.get(name, 0)}
+            for name, on in self.config.phases().items()
+        }
+
+    def body_index(self, name: str) -> int:
+        """Index of the body called ``name``."""
+        return self.scene.index(name)
+
+    # -- setters -----------------------------------------------------------------------------
+
+    def set_velocity(self, body: int, velocity=None, angular_velocity=None,
+                     world: int | None = None) -> None:
+        """Set a body's velocity (3,) m/s and/or angular velocity (3,) rad/s, world frame.
+
+        For a dynamic body L is set to I(t) omega (a component along a degenerate axis is lost).
+        ``world``: which world (None = all; values may then be (B, 3) for one per world).
+        """
+        i = self._body(body, "set_velocity")
+        if self.model.motion[i] == STATIC:
+            raise ValueError(f"World.set_velocity: body {i} ({self.scene.bodies[i].name!r}) is "
+                             "static and cannot move")
+        worlds = self._worlds(world, "set_velocity")
+        s = self.state
+        if velocity is not None:
+            s.velocity[worlds, i] = self._values(velocity, "velocity", "set_velocity", worlds)
+        if angular_velocity is not None:
+            w = self._values(angular_velocity, "angular_velocity", "set_velocity", worlds)
+            s.angular_velocity[worlds, i] = w
+            if self.model.motion[i] == DYNAMIC:
+                r = s.rotation[worlds, i]
+                moments = _safe_inverse(self.model.inverse_moments[worlds, i])
+                body_w = np.einsum("...ji,...j->...i", r, w)
+                s.angular_momentum[worlds, i] = np.einsum("...ij,...j->...i", r, moments * body_w)
+        self._refresh_derived()
+
+    def set_pose(self, body: int, position=None, orientation=None, world: int | None = None) -> None:
+        """Set a body's centre-of-mass position (3,) m and/or principal-frame orientation (4,)
+        unit quaternion (w, x, y, z). L is kept; omega follows from it."""
+        i = self._body(body, "set_pose")
+        worlds = self._worlds(world, "set_pose")
+        if position is not None:
+            self.state.position[worlds, i] = self._values(position, "position", "set_pose", worlds)
+        if orientation is not None:
+            q = self._values(orientation, "orientation", "set_pose", worlds, size=4)
+            quat.check_unit(q, f"World.set_pose: body {i} orientation")
+            self.state.orientation[worlds, i] = quat.normalize(q)
+        self._refresh_derived()
+
+    def apply_impulse(self, body: int, impulse, point=None, world: int | None = None) -> None:
+        """Apply an impulse (3,) N s at ``point`` (3,) m, world frame (default: the centre of
+        mass): V += j/M, L += (point - X) x j. Only dynamic bodies respond."""
+        i = self._body(body, "apply_impulse")
+        worlds = self._worlds(world, "apply_impulse")
+        j = self._values(impulse, "impulse", "apply_impulse", worlds)
+        if self.model.motion[i] != DYNAMIC:
+            raise ValueError(f"World.apply_impulse: body {i} ({self.scene.bodies[i].name!r}) is "
+                             "not dynamic (infinite mass)")
+        s = self.state
+        s.velocity[worlds, i] += j * self.model.inverse_mass[worlds, i][..., None]
+        if point is not None:
+            r = self._values(point, "point", "apply_impulse", worlds) - s.position[worlds, i]
+            s.angular_momentum[worlds, i] += np.cross(r, j)
+        self._refresh_derived()
+
+    def apply_force(self, body: int, force, point=None, world: int | None = None) -> None:
+        """Add a force (3,) N acting at ``point`` (3,) m (default: the centre of mass) during
+        the next step; off the centre it also adds the torque (point - X) x F."""
+        i = self._body(body, "apply_force")
+        worlds = self._worlds(world, "apply_force")
+        f = self._values(force, "force", "apply_force", worlds)
+        self.state.force[worlds, i] += f
+        if point is not None:
+            r = self._values(point, "point", "apply_force", worlds) - self.state.position[worlds, i]
+            self.state.torque[worlds, i] += np.cross(r, f)
+
+    def apply_torque(self, body: int, torque, world: int | None = None) -> None:
+        """Add a torque (3,) N m about the centre of mass during the next step."""
+        i = self._body(body, "apply_torque")
+        worlds = self._worlds(world, "apply_torque")
+        self.state.torque[worlds, i] += self._values(torque, "torque", "apply_torque", worlds)
+
+    # -- helpers -----------------------------------------------------------------------------
+
+    def _refresh_derived(self) -> None:
+        s, m = self.state, self.model
+        integrate.refresh_rotation_and_angular_velocity(
+            s.orientation, s.angular_momentum, m.inverse_moments, m.motion, s.rotation,
+            s.angular_velocity)
+
+    def _body(self, body, method: str) -> int:
+        n = len(self.scene)
+        if isinstance(body, str):
+            return self.scene.index(body)
+        if isinstance(body, bool) or not isinstance(body, (int, np.integer)) or not 0 <= body < n:
+            raise ValueError(f"World.{method}: body must be an index in [0, {n - 1}] or a name, "
+                             f"got {body!r}")
+        return int(body)
+
+    def _worlds(self, world, method: str):
+        if world is None:
+            return slice(None)
+        b = self.num_worlds
+        if isinstance(world, bool) or not isinstance(world, (int, np.integer)) or not 0 <= world < b:
+            raise ValueError(f"World.{method}: world must be None or an index in [0, {b - 1}], "
+                             f"got {world!r}")
+        return int(world)
+
+    def _values(self, value, field: str, method: str, worlds, size: int = 3) -> np.ndarray:
+        arr = np.asarray(value, dtype=np.float64)
+        allowed = [(size,)] + ([(self.num_worlds, size)] if worlds == slice(None) else [])
+        if arr.shape not in allowed:
+            raise ValueError(f"World.{method}: {field} must have shape "
+                             f"{' or '.join(map(str, allowed))}, got {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"World.{method}: {field} must be finite, got {arr.tolist()}")
+        return arr
+
+
+def _safe_inverse(x: np.ndarray) -> np.ndarray:
+    """1/x where x > 0, else 0 (mass from inverse mass: 0 for infinite-mass bodies)."""
+    out = np.zeros_like(x)
+    np.divide(1.0, x, out=out, where=x > 0)
+    return out
+
+
+def _build_model(scene: Scene, num_worlds: int) -> Model:
+    bodies = scene.bodies
+    return Model(
+        motion=np.array([b.motion for b in bodies], dtype=np.int32),
+        inverse_mass=np.tile(np.array([b.inverse_mass for b in bodies]), (num_worlds, 1)),
+        inverse_moments=np.tile(np.array([b.inverse_moments for b in bodies]), (num_worlds, 1, 1)),
+        gravity=scene.gravity.copy(),
+    )
+
+
+def _build_state(scene: Scene, num_worlds: int) -> State:
+    bodies = scene.bodies
+    n = len(bodies)
+
+    def tiled(values):
+        return np.ascontiguousarray(np.tile(np.array(values, dtype=np.float64),
+                                            (num_worlds,) + (1,) * np.ndim(values)))
+
+    rotation = quat.to_matrix(np.array([b.orientation for b in bodies]))
+    # L = R diag(I_body) R^T omega for dynamic bodies; 0 for the rest
+    body_w = np.einsum("nji,nj->ni", rotation, np.array([b.angular_velocity for b in bodies]))
+    moments = np.array([b.principal_moments if b.motion == DYNAMIC else np.zeros(3)
+                        for b in bodies])
+    momentum = np.einsum("nij,nj->ni", rotation, moments * body_w)
+    return State(
+        position=tiled([b.position for b in bodies]),
+        orientation=tiled([b.orientation for b in bodies]),
+        velocity=tiled([b.velocity for b in bodies]),
+        angular_momentum=tiled(momentum),
+        angular_velocity=tiled([b.angular_velocity for b in bodies]),
+        rotation=tiled(rotation),
+        force=np.zeros((num_worlds, n, 3)),
+        torque=np.zeros((num_worlds, n, 3)),
+    )

@@ -1,0 +1,135 @@
+"""Bad input is rejected when the scene or world is built, with a message saying what and where."""
+
+import numpy as np
+import pytest
+
+import rigid_gym as rg
+
+
+def scene_with(**body):
+    scene = rg.Scene()
+    scene.add_body(body.pop("shape", rg.Sphere(0.1)), name="ball", **body)
+    return scene
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(mass=-1.0), r"body 0 \('ball'\): mass: must be finite and in \(0.0, inf\), got -1"),
+        (dict(mass=0.0), r"mass: must be finite and in \(0.0"),
+        (dict(density=-5.0), r"density: must be finite"),
+        (dict(mass=np.nan), r"mass: must be finite"),
+        (dict(mass=1.0, density=1.0), r"exactly one of mass"),
+        (dict(), r"exactly one of mass"),
+        (dict(mass=1.0, position=(0, np.nan, 0)), r"body 0 \('ball'\): position: must be finite"),
+        (dict(mass=1.0, velocity=(np.inf, 0, 0)), r"velocity: must be finite"),
+        (dict(mass=1.0, position=(0, 0)), r"position: expected shape \(3,\)"),
+        (dict(mass=1.0, orientation=(1, 0, 0, 0.1)), r"orientation: quaternion .* unit norm"),
+        (dict(mass=1.0, friction=-0.1), r"friction: must be finite and in \[0.0, inf\)"),
+        (dict(mass=1.0, restitution=1.5), r"restitution: must be finite and in \[0.0, 1.0\]"),
+        (dict(mass=1.0, inertia=(1.0, 1.0, 3.0)), r"triangle inequality"),
+        (dict(mass=1.0, inertia=(-1.0, 1.0, 1.0)), r"moments must be >= 0"),
+        (dict(mass=1.0, inertia=[[1, 0.5, 0], [0, 1, 0], [0, 0, 1]]), r"symmetric"),
+        (dict(mass=1.0, kinematic=True), r"kinematic body has infinite mass"),
+        (dict(shape=rg.Plane(), mass=1.0), r"only static bodies"),
+        (dict(shape="box", mass=1.0), r"shape must be one of"),
+    ],
+)
+def test_bad_body_is_rejected_naming_body_and_field(kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        scene_with(**kwargs)
+
+
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda: rg.Sphere(0.0), r"Sphere.radius: must be finite and > 0"),
+        (lambda: rg.Sphere(np.nan), r"Sphere.radius: must be finite"),
+        (lambda: rg.Box((0.1, -0.1, 0.1)), r"Box.half_extents: every entry must be > 0"),
+        (lambda: rg.Box((0.1, 0.1)), r"Box.half_extents: expected shape \(3,\)"),
+        (lambda: rg.Capsule(0.1, 0.0), r"Capsule.half_length: must be finite and > 0"),
+        (lambda: rg.Pose(orientation=(2, 0, 0, 0)), r"Pose.orientation: quaternion"),
+        (lambda: rg.Compound([]), r"Compound.parts: needs at least one"),
+    ],
+)
+def test_bad_shape_is_rejected(make, message):
+    with pytest.raises(ValueError, match=message):
+        make()
+
+
+def cube_mesh_arrays():
+    v = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+    t = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    return v, t
+
+
+def test_closed_cube_mesh_is_accepted():
+    v, t = cube_mesh_arrays()
+    assert rg.Mesh(v, t).volume() == pytest.approx(8.0)
+
+
+def test_open_mesh_is_rejected():
+    v, t = cube_mesh_arrays()
+    with pytest.raises(ValueError, match="open"):
+        rg.Mesh(v, t[:-1])
+
+
+def test_inside_out_mesh_is_rejected():
+    v, t = cube_mesh_arrays()
+    with pytest.raises(ValueError, match="inside-out"):
+        rg.Mesh(v, t[:, ::-1])
+
+
+def test_mesh_with_nan_vertex_is_rejected():
+    v, t = cube_mesh_arrays()
+    v[3, 1] = np.nan
+    with pytest.raises(ValueError, match="Mesh.vertices: must be finite"):
+        rg.Mesh(v, t)
+
+
+def test_duplicate_body_names_are_rejected():
+    scene = rg.Scene()
+    scene.add_body(rg.Sphere(0.1), mass=1.0, name="a")
+    with pytest.raises(ValueError, match="name 'a' is already used"):
+        scene.add_body(rg.Sphere(0.1), mass=1.0, name="a")
+
+
+@pytest.mark.parametrize("dt", [0.0, -1 / 240, np.nan, np.inf, "fast"])
+def test_bad_time_step_is_rejected(dt):
+    with pytest.raises(ValueError, match="World.dt"):
+        rg.World(scene_with(mass=1.0), dt=dt)
+
+
+@pytest.mark.parametrize("num_worlds", [0, -3, 2.5, True])
+def test_bad_world_count_is_rejected(num_worlds):
+    with pytest.raises(ValueError, match="num_worlds"):
+        rg.World(scene_with(mass=1.0), num_worlds=num_worlds)
+
+
+def test_bad_gravity_and_empty_scene_are_rejected():
+    with pytest.raises(ValueError, match="Scene.gravity: must be finite"):
+        rg.Scene(gravity=(0, 0, np.nan))
+    with pytest.raises(ValueError, match="no bodies"):
+        rg.World(rg.Scene())
+
+
+def test_bad_setter_input_is_rejected():
+    world = rg.World(scene_with(mass=1.0), num_worlds=3)
+    with pytest.raises(ValueError, match=r"set_velocity: velocity must be finite"):
+        world.set_velocity(0, (np.nan, 0, 0))
+    with pytest.raises(ValueError, match=r"body must be an index in \[0, 0\]"):
+        world.set_velocity(4, (0, 0, 0))
+    with pytest.raises(ValueError, match=r"world must be None or an index in \[0, 2\]"):
+        world.apply_force(0, (0, 0, 1), world=3)
+    with pytest.raises(ValueError, match=r"orientation"):
+        world.set_pose(0, orientation=(1, 1, 0, 0))
+    with pytest.raises(ValueError, match=r"shape \(3,\) or \(3, 3\)"):
+        world.apply_impulse(0, np.zeros((2, 3)))
+
+
+def test_bad_solver_config_is_rejected():
+    with pytest.raises(ValueError, match="rotation_order must be one of"):
+        rg.SolverConfig(rotation_order=4)
+    with pytest.raises(ValueError, match="unknown option"):
+        rg.SolverConfig.for_scene(rg.Scene(), rotation_ordr=2)
