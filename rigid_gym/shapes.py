@@ -132,12 +132,18 @@ class Mesh:
     ``triangles``: (T, 3) int vertex indices, counter-clockwise seen from outside (outward
     normals). The mesh must be closed: every edge is used by exactly two triangles, once in
     each direction. Its enclosed volume must be positive (an inside-out mesh is rejected).
+    ``sdf_resolution``: cells along the longest side of the grid on which collision samples
+    the signed distance (contacts with a mesh are accurate to about one cell).
     """
 
     vertices: np.ndarray
     triangles: np.ndarray
+    sdf_resolution: int = 32
 
     def __post_init__(self):
+        if (isinstance(self.sdf_resolution, bool) or not isinstance(self.sdf_resolution, (int, np.integer))
+                or not 4 <= self.sdf_resolution <= 512):
+            raise ValueError(f"Mesh.sdf_resolution: must be an int in [4, 512], got {self.sdf_resolution!r}")
         v = _finite_array(self.vertices, (-1, 3), "Mesh.vertices")
         try:
             t = np.array(self.triangles, dtype=np.int64)

@@ -17,6 +17,8 @@ from typing import NamedTuple
 import numpy as np
 
 from rigid_gym import pipeline
+from rigid_gym.collision import Collider, Contacts
+from rigid_gym.geometry import compile_geometry
 from rigid_gym import quaternion as quat
 from rigid_gym.config import SolverConfig
 from rigid_gym.kernels import integrate
@@ -89,6 +91,9 @@ class World:
         self.num_worlds = int(num_worlds) if self.batched else 1
         self.config = SolverConfig.for_scene(scene) if config is None else config
         self.model = _build_model(scene, self.num_worlds)
+        self.geometry = compile_geometry(scene.bodies, self.config.box_edge_segments)
+        self.collider = Collider(self.geometry, self.model.motion, self.num_worlds,
+                                 self.config.sweep)
         self.state = _build_state(scene, self.num_worlds)
         self._refresh_derived()
         self._initial_state = tuple(a.copy() for a in self.state)
@@ -194,6 +199,16 @@ class World:
         orbital = np.cross(s.position[:, dynamic], mass[..., None] * s.velocity[:, dynamic])
         total = np.sum(orbital + s.angular_momentum[:, dynamic], axis=1)
         return total if self.batched else total[0]
+
+    def contacts(self, margin: float = 0.0) -> Contacts:
+        """Contacts at the current poses: every point of one body inside another (depth > 0),
+        or within ``margin`` (m) of it. See :class:`rigid_gym.collision.Contacts`; rows of all
+        worlds together, with their world index."""
+        margin = float(margin)
+        if not np.isfinite(margin) or margin < 0.0:
+            raise ValueError(f"World.contacts: margin must be finite and >= 0 m, got {margin!r}")
+        self.collider.detect(self.state.position, self.state.rotation, margin)
+        return self.collider.contacts()
 
     def profile(self) -> dict[str, dict]:
         """Per phase, in step order: whether it runs, total seconds and calls so far."""

@@ -1,0 +1,305 @@
+"""Narrow phase: the contacts between two bodies at given poses.
+
+Every contact has a point (world, m), a unit normal pointing from body B to body A (the
+direction that separates A from B) and a depth (m, > 0 when they overlap). For each pair of
+geoms (one of A's, one of B's):
+
+* sphere/capsule against sphere/capsule: closest points of their cores (a point, a segment)
+  in closed form, exact;
+* sphere/capsule against box/mesh/plane: the core's points in the other geom's phi, exact for
+  boxes and planes (their phi is exact), to the grid's accuracy for meshes; a capsule's core
+  is sampled at its two ends against a plane (exact: depth is linear along it) and at
+  ``CAPSULE_CORE_SAMPLES`` points against boxes and meshes (its ends, so that a capsule lying
+  on a face has two contacts, and points between them for edges it crosses);
+* box against box: separating axes and face clipping in closed form (``boxbox.py``), since
+  sampled distances give sideways normals for boxes stacked face to face;
+* box/mesh against mesh/plane, mesh against box: A's surface samples in B's phi and B's in A's (GBF 2003),
+  corners first, edge samples only where they can add a contact (``collide_samples_with_field``).
+
+The contact point is the deepest point of one body inside the other: a sample, or a core point
+moved by its radius against the normal. The deepest contact of the pair is written first.
+"""
+
+import numpy as np
+
+from rigid_gym.kernels.boxbox import collide_boxes
+from rigid_gym.kernels.geometry import BOX, CAPSULE, PLANE, SPHERE, geom_distance
+from rigid_gym.kernels.jit import kernel
+
+CAPSULE_CORE_SAMPLES = 5
+
+BOX_CORNERS = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=np.float64)
+"""The 8 corners of a box in units of its half extents, in sample order."""
+BOX_EDGES = np.array([(a, b) for a in range(8) for b in range(a + 1, 8)
+                      if np.count_nonzero(BOX_CORNERS[a] != BOX_CORNERS[b]) == 1], dtype=np.int32)
+"""The 12 edges of a box as corner pairs, in sample order."""
+
+
+@kernel
+def to_world(x, r, px, py, pz):
+    """x + R p for a pose (x (3,), R (3, 3)); returns a 3-tuple."""
+    return (x[0] + r[0, 0] * px + r[0, 1] * py + r[0, 2] * pz,
+            x[1] + r[1, 0] * px + r[1, 1] * py + r[1, 2] * pz,
+            x[2] + r[2, 0] * px + r[2, 1] * py + r[2, 2] * pz)
+
+
+@kernel
+def to_local(x, r, px, py, pz):
+    """R^T (p - x) for a pose (x (3,), R (3, 3)); returns a 3-tuple."""
+    dx, dy, dz = px - x[0], py - x[1], pz - x[2]
+    return (r[0, 0] * dx + r[1, 0] * dy + r[2, 0] * dz,
+            r[0, 1] * dx + r[1, 1] * dy + r[2, 1] * dz,
+            r[0, 2] * dx + r[1, 2] * dy + r[2, 2] * dz)
+
+
+@kernel
+def rotate(r, vx, vy, vz):
+    """R v; returns a 3-tuple."""
+    return (r[0, 0] * vx + r[0, 1] * vy + r[0, 2] * vz,
+            r[1, 0] * vx + r[1, 1] * vy + r[1, 2] * vz,
+            r[2, 0] * vx + r[2, 1] * vy + r[2, 2] * vz)
+
+
+@kernel
+def world_point_in_geom(geo, g, xb, rb, wx, wy, wz):
+    """phi of geom ``g`` (of the body at pose xb, rb) at world point w, and its outward normal
+    in world coordinates; returns (phi, nx, ny, nz)."""
+    bx, by, bz = to_local(xb, rb, wx, wy, wz)
+    lx, ly, lz = to_local(geo.geom_position[g], geo.geom_rotation[g], bx, by, bz)
+    phi, nx, ny, nz = geom_distance(geo, g, lx, ly, lz)
+    nx, ny, nz = rotate(geo.geom_rotation[g], nx, ny, nz)
+    nx, ny, nz = rotate(rb, nx, ny, nz)
+    return phi, nx, ny, nz
+
+
+@kernel
+def core_point(geo, g, x, r, t):
+    """World position of the point at parameter t in [-1, 1] along geom g's core (a sphere's
+    centre; a capsule's axis from -half_length to +half_length)."""
+    p = geo.geom_position[g]
+    gr = geo.geom_rotation[g]
+    s = t * geo.geom_size[g, 1] if geo.geom_type[g] == CAPSULE else 0.0
+    return to_world(x, r, p[0] + s * gr[0, 2], p[1] + s * gr[1, 2], p[2] + s * gr[2, 2])
+
+
+@kernel
+def closest_on_segments(p1, q1, p2, q2):
+    """Parameters (s, t) in [0, 1] of the closest points p1 + s (q1 - p1), p2 + t (q2 - p2)
+    of two segments (Ericson, Real-Time Collision Detection, 5.1.9). Points are 3-tuples."""
+    d1 = (q1[0] - p1[0], q1[1] - p1[1], q1[2] - p1[2])
+    d2 = (q2[0] - p2[0], q2[1] - p2[1], q2[2] - p2[2])
+    rr = (p1[0] - p2[0], p1[1] - p2[1], p1[2] - p2[2])
+    a = d1[0] * d1[0] + d1[1] * d1[1] + d1[2] * d1[2]
+    e = d2[0] * d2[0] + d2[1] * d2[1] + d2[2] * d2[2]
+    f = d2[0] * rr[0] + d2[1] * rr[1] + d2[2] * rr[2]
+    if a == 0.0 and e == 0.0:
+        return 0.0, 0.0
+    if a == 0.0:
+        return 0.0, min(max(f / e, 0.0), 1.0)
+    c = d1[0] * rr[0] + d1[1] * rr[1] + d1[2] * rr[2]
+    if e == 0.0:
+        return min(max(-c / a, 0.0), 1.0), 0.0
+    b = d1[0] * d2[0] + d1[1] * d2[1] + d1[2] * d2[2]
+    denom = a * e - b * b
+    s = min(max((b * f - c * e) / denom, 0.0), 1.0) if denom > 0.0 else 0.0
+    t = (b * s + f) / e
+    if t < 0.0:
+        t = 0.0
+        s = min(max(-c / a, 0.0), 1.0)
+    elif t > 1.0:
+        t = 1.0
+        s = min(max((b - c) / a, 0.0), 1.0)
+    return s, t
+
+
+@kernel
+def emit(points, normals, depths, index, capacity, px, py, pz, nx, ny, nz, depth):
+    """Write one contact at ``index`` if it fits."""
+    if index < capacity:
+        points[index, 0], points[index, 1], points[index, 2] = px, py, pz
+        normals[index, 0], normals[index, 1], normals[index, 2] = nx, ny, nz
+        depths[index] = depth
+
+
+@kernel
+def collide_cores(geo, ga, gb, xa, ra, xb, rb, margin, points, normals, depths, index, capacity):
+    """Sphere/capsule geom ga against sphere/capsule geom gb; returns contacts written (0 or 1)."""
+    a0 = core_point(geo, ga, xa, ra, -1.0)
+    a1 = core_point(geo, ga, xa, ra, 1.0)
+    b0 = core_point(geo, gb, xb, rb, -1.0)
+    b1 = core_point(geo, gb, xb, rb, 1.0)
+    s, t = closest_on_segments(a0, a1, b0, b1)
+    pa = (a0[0] + s * (a1[0] - a0[0]), a0[1] + s * (a1[1] - a0[1]), a0[2] + s * (a1[2] - a0[2]))
+    pb = (b0[0] + t * (b1[0] - b0[0]), b0[1] + t * (b1[1] - b0[1]), b0[2] + t * (b1[2] - b0[2]))
+    dx, dy, dz = pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]
+    dist = (dx * dx + dy * dy + dz * dz) ** 0.5
+    radius_a, radius_b = geo.geom_size[ga, 0], geo.geom_size[gb, 0]
+    depth = radius_a + radius_b - dist
+    if depth <= -margin:
+        return 0
+    if dist > 0.0:
+        nx, ny, nz = dx / dist, dy / dist, dz / dist
+    else:
+        nx, ny, nz = 0.0, 0.0, 1.0
+    emit(points, normals, depths, index, capacity,
+         pa[0] - radius_a * nx, pa[1] - radius_a * ny, pa[2] - radius_a * nz, nx, ny, nz, depth)
+    return 1
+
+
+@kernel
+def collide_core_with_field(geo, gc, xc, rc, gf, xf, rf, sign, margin, points, normals, depths,
+                            index, capacity):
+    """Core of sphere/capsule geom gc (pose xc, rc) in the phi of geom gf (pose xf, rf).
+
+    sign = +1 when gc belongs to body A (normals are gf's outward normals), -1 when it belongs
+    to B. Returns the number of contacts found.
+    """
+    radius = geo.geom_size[gc, 0]
+    samples = 1
+    if geo.geom_type[gc] == CAPSULE:
+        # against a plane the depth is linear along the axis: its ends are the extremes
+        samples = 2 if geo.geom_type[gf] == PLANE else CAPSULE_CORE_SAMPLES
+    found = 0
+    for k in range(samples):
+        t = -1.0 + 2.0 * k / (samples - 1) if samples > 1 else 0.0
+        cx, cy, cz = core_point(geo, gc, xc, rc, t)
+        phi, nx, ny, nz = world_point_in_geom(geo, gf, xf, rf, cx, cy, cz)
+        depth = radius - phi
+        if depth > -margin:
+            emit(points, normals, depths, index + found, capacity, cx - radius * nx,
+                 cy - radius * ny, cz - radius * nz, sign * nx, sign * ny, sign * nz, depth)
+            found += 1
+    return found
+
+
+@kernel
+def sample_in_field(geo, k, xs, rs, gf, xf, rf, sign, margin, points, normals, depths, index,
+                    capacity):
+    """Surface sample k (of a geom at pose xs, rs) in the phi of geom gf; returns 1 if it is a
+    contact (written at ``index``), else 0."""
+    p = geo.sample_points[k]
+    wx, wy, wz = to_world(xs, rs, p[0], p[1], p[2])
+    phi, nx, ny, nz = world_point_in_geom(geo, gf, xf, rf, wx, wy, wz)
+    if -phi <= -margin:
+        return 0
+    emit(points, normals, depths, index, capacity, wx, wy, wz, sign * nx, sign * ny, sign * nz, -phi)
+    return 1
+
+
+@kernel
+def collide_samples_with_field(geo, gs, xs, rs, gf, xf, rf, sign, margin, points, normals, depths,
+                               index, capacity):
+    """Surface samples of box or mesh geom gs (pose xs, rs) in the phi of geom gf (pose xf, rf);
+    sign as in ``collide_core_with_field``. Returns the number of contacts found.
+
+    The corners/vertices (the first ``sample_vertex_count`` samples) are always tested. Against
+    a plane nothing else can be deepest (a polyhedron's deepest point in a half-space is a
+    vertex). A box's edge samples are tested only on edges with neither corner inside: that is
+    exactly the edge-edge crossing the corners miss, and it keeps a resting face to 4 contacts.
+    A mesh's edge samples are always tested (its target may be nonconvex).
+    """
+    begin, end = geo.sample_start[gs], geo.sample_start[gs + 1]
+    vertices = geo.sample_vertex_count[gs]
+    found = 0
+    corner_inside = 0
+    for k in range(begin, begin + vertices):
+        hit = sample_in_field(geo, k, xs, rs, gf, xf, rf, sign, margin, points, normals, depths,
+                              index + found, capacity)
+        found += hit
+        if hit and k - begin < 32:
+            corner_inside |= 1 << (k - begin)
+    if geo.geom_type[gf] == PLANE:
+        return found
+    if geo.geom_type[gs] != BOX:
+        for k in range(begin + vertices, end):
+            found += sample_in_field(geo, k, xs, rs, gf, xf, rf, sign, margin, points, normals,
+                                     depths, index + found, capacity)
+        return found
+    per_edge = (end - begin - vertices) // 12
+    for e in range(12):
+        if (corner_inside >> BOX_EDGES[e, 0]) & 1 or (corner_inside >> BOX_EDGES[e, 1]) & 1:
+            continue
+        first = begin + vertices + e * per_edge
+        for k in range(first, first + per_edge):
+            found += sample_in_field(geo, k, xs, rs, gf, xf, rf, sign, margin, points, normals,
+                                     depths, index + found, capacity)
+    return found
+
+
+@kernel
+def geom_pose(geo, g, x, r, out_x, out_r):
+    """World pose of geom g of a body at pose (x, r), written to out_x (3,), out_r (3, 3)."""
+    p = geo.geom_position[g]
+    gr = geo.geom_rotation[g]
+    wx, wy, wz = to_world(x, r, p[0], p[1], p[2])
+    out_x[0], out_x[1], out_x[2] = wx, wy, wz
+    for c in range(3):
+        cx, cy, cz = rotate(r, gr[0, c], gr[1, c], gr[2, c])
+        out_r[0, c], out_r[1, c], out_r[2, c] = cx, cy, cz
+
+
+@kernel
+def collide_box_geoms(geo, ga, xa, ra, gb, xb, rb, margin, points, normals, depths, index,
+                      capacity, scratch):
+    """Box geom ga against box geom gb in closed form (``boxbox.collide_boxes``)."""
+    pose = scratch[2]
+    geom_pose(geo, ga, xa, ra, pose[0], pose[1:4])
+    geom_pose(geo, gb, xb, rb, pose[4], pose[5:8])
+    return collide_boxes(pose[0], pose[1:4], geo.geom_size[ga], pose[4], pose[5:8],
+                         geo.geom_size[gb], margin, points, normals, depths, index, capacity,
+                         scratch)
+
+
+@kernel
+def is_core(geo, g):
+    return geo.geom_type[g] == SPHERE or geo.geom_type[g] == CAPSULE
+
+
+@kernel
+def collide_bodies(geo, a, b, xa, ra, xb, rb, margin, points, normals, depths, start, capacity,
+                   scratch):
+    """All contacts of body a (pose xa (3,), ra (3, 3)) with body b, written to
+    points/normals/depths from ``start`` while below ``capacity``, deepest first.
+    scratch: (3, 16, 3) float64 work space.
+
+    Reports contacts with depth > -margin (m). Returns how many were found (some may not have
+    been written if the buffer was too small: the caller checks and grows it).
+    """
+    found = 0
+    for ga in range(geo.body_geom_start[a], geo.body_geom_start[a + 1]):
+        for gb in range(geo.body_geom_start[b], geo.body_geom_start[b + 1]):
+            index = start + found
+            if is_core(geo, ga) and is_core(geo, gb):
+                found += collide_cores(geo, ga, gb, xa, ra, xb, rb, margin, points, normals, depths,
+                                       index, capacity)
+            elif is_core(geo, ga):
+                found += collide_core_with_field(geo, ga, xa, ra, gb, xb, rb, 1.0, margin, points,
+                                                 normals, depths, index, capacity)
+            elif is_core(geo, gb):
+                found += collide_core_with_field(geo, gb, xb, rb, ga, xa, ra, -1.0, margin, points,
+                                                 normals, depths, index, capacity)
+            elif geo.geom_type[ga] == BOX and geo.geom_type[gb] == BOX:
+                found += collide_box_geoms(geo, ga, xa, ra, gb, xb, rb, margin, points, normals,
+                                           depths, index, capacity, scratch)
+            else:
+                found += collide_samples_with_field(geo, ga, xa, ra, gb, xb, rb, 1.0, margin,
+                                                    points, normals, depths, index, capacity)
+                found += collide_samples_with_field(geo, gb, xb, rb, ga, xa, ra, -1.0, margin,
+                                                    points, normals, depths, start + found, capacity)
+    if found > 0 and start + found <= capacity:
+        move_deepest_first(points, normals, depths, start, start + found)
+    return found
+
+
+@kernel
+def move_deepest_first(points, normals, depths, begin, end):
+    """Swap the deepest contact in [begin, end) into position ``begin``."""
+    deepest = begin
+    for k in range(begin + 1, end):
+        if depths[k] > depths[deepest]:
+            deepest = k
+    if deepest != begin:
+        for c in range(3):
+            points[begin, c], points[deepest, c] = points[deepest, c], points[begin, c]
+            normals[begin, c], normals[deepest, c] = normals[deepest, c], normals[begin, c]
+        depths[begin], depths[deepest] = depths[deepest], depths[begin]
