@@ -68,21 +68,25 @@ class Collider:
         self.normal = np.zeros((b, capacity, 3))
         self.depth = np.zeros((b, capacity))
 
-    def find_pairs(self, position: np.ndarray, rotation: np.ndarray, margin: float) -> None:
-        """Fill pair_a/pair_b/pair_count for poses (B, n, 3), (B, n, 3, 3); margin in m."""
+    def find_pairs(self, state, margin: float, dt: float = 0.0, acceleration: float = 0.0) -> None:
+        """Fill pair_a/pair_b/pair_count with the pairs that may touch within dt (s) of the
+        state's poses (a ``world.State``), boxes grown by margin (m) and by how far the bodies
+        can move in dt under an acceleration bound (m/s^2)."""
         while True:
-            find_pairs(position, rotation, self.motion, self.geometry, margin, self.sweep,
+            find_pairs(state.position, state.rotation, state.velocity, state.angular_velocity,
+                       self.motion, self.geometry, margin, dt, acceleration, self.sweep,
                        self.bounds, self.pair_a, self.pair_b, self.pair_count)
             needed = int(self.pair_count.max(initial=0))
             if needed <= self.pair_a.shape[1]:
                 return
             self._allocate_pairs(2 * needed)
 
-    def detect(self, position: np.ndarray, rotation: np.ndarray, margin: float = 0.0) -> None:
-        """Fill the contact buffers for the given poses (contacts deeper than -margin, m)."""
-        self.find_pairs(position, rotation, margin)
+    def detect(self, state, margin: float = 0.0) -> None:
+        """Fill the contact buffers for the state's current poses (contacts deeper than -margin,
+        m)."""
+        self.find_pairs(state, margin)
         while True:
-            detect_contacts(position, rotation, self.geometry, self.pair_a, self.pair_b,
+            detect_contacts(state.position, state.rotation, self.geometry, self.pair_a, self.pair_b,
                             self.pair_count, margin, self.body_a, self.body_b, self.point,
                             self.normal, self.depth, self.contact_count)
             needed = int(self.contact_count.max(initial=0))

@@ -1,13 +1,16 @@
 """SolverConfig: which phases of the step run and how.
 
 ``SolverConfig.for_scene(scene)`` derives the cheapest configuration that cannot change a
-scene's result (DESIGN.md §5); every field can be overridden with ``dataclasses.replace``.
+scene's result (DESIGN.md §5); any field can be given to override it, and
+``dataclasses.replace`` changes one later.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 if TYPE_CHECKING:
     from rigid_gym.scene import Scene
@@ -19,45 +22,71 @@ ROTATION_ORDERS = (1, 2, 3)
 class SolverConfig:
     """Switches and counts for :func:`rigid_gym.pipeline.step`.
 
+    collision_passes: sweeps of the collision phase (real restitution, old velocities); 0
+        switches the phase off. It can only matter when some restitution is > 0.
+    contact_passes: sweeps of the contact phase (restitution ramping from -0.9 to 0).
+    shock_sweeps: sweeps per level of shock propagation; 0 switches it off. It only matters
+        where a body can rest on another under gravity.
     rotation_order: 1 = the exact-rotation update of the course notes with omega at the start
         of the step (first order); 2 = Buss's second-order update (omega + h/2 alpha);
         3 = Buss's third-order update. Cost grows slightly with the order.
     box_edge_segments: each box edge carries this many - 1 surface samples between its
-        corners, so that edge-edge crossings are detected once they are deeper than about
-        edge length / (2 box_edge_segments) (benchmarks/box_edge_samples.py).
+        corners, so that edge-edge crossings with meshes are detected once they are deeper
+        than about edge length / (2 box_edge_segments) (benchmarks/box_edge_samples.py).
     sweep: broad phase by sort-and-sweep (True) or brute force (False); None chooses
         sort-and-sweep from ``collision.SWEEP_MIN_BODIES`` bounded bodies.
     """
 
+    collision_passes: int = 5
+    contact_passes: int = 10
+    shock_sweeps: int = 2
     rotation_order: int = 2
     box_edge_segments: int = 4
     sweep: bool | None = None
 
     def __post_init__(self):
+        for name, low, high in (("collision_passes", 0, 1000), ("contact_passes", 0, 1000),
+                                ("shock_sweeps", 0, 1000), ("box_edge_segments", 1, 64)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
+                    or not low <= value <= high:
+                raise ValueError(f"SolverConfig.{name} must be an int in [{low}, {high}], "
+                                 f"got {value!r}")
         if self.rotation_order not in ROTATION_ORDERS:
-            raise ValueError(
-                f"SolverConfig.rotation_order must be one of {ROTATION_ORDERS}, "
-                f"got {self.rotation_order!r}"
-            )
-        if (isinstance(self.box_edge_segments, bool) or not isinstance(self.box_edge_segments, int)
-                or not 1 <= self.box_edge_segments <= 64):
-            raise ValueError("SolverConfig.box_edge_segments must be an int in [1, 64], "
-                             f"got {self.box_edge_segments!r}")
+            raise ValueError(f"SolverConfig.rotation_order must be one of {ROTATION_ORDERS}, "
+                             f"got {self.rotation_order!r}")
         if self.sweep not in (None, True, False):
             raise ValueError(f"SolverConfig.sweep must be None, True or False, got {self.sweep!r}")
 
     @classmethod
     def for_scene(cls, scene: Scene, **overrides) -> SolverConfig:
-        """The default configuration for ``scene`` with what it cannot need switched off."""
+        """The default configuration with what ``scene`` cannot need switched off:
+        no collision phase when every restitution is 0; no shock propagation without gravity
+        or with fewer than two dynamic bodies (nothing can rest on anything but the ground).
+        ``overrides`` (any field) win over both."""
+        from rigid_gym.kernels.integrate import DYNAMIC
+
         known = {f.name for f in fields(cls)}
         unknown = set(overrides) - known
         if unknown:
-            raise ValueError(
-                f"SolverConfig.for_scene: unknown option(s) {sorted(unknown)}; "
-                f"allowed: {sorted(known)}"
-            )
-        return cls(**overrides)
+            raise ValueError(f"SolverConfig.for_scene: unknown option(s) {sorted(unknown)}; "
+                             f"allowed: {sorted(known)}")
+        derived = {}
+        if all(b.restitution == 0.0 for b in scene.bodies):
+            derived["collision_passes"] = 0
+        dynamic = sum(b.motion == DYNAMIC for b in scene.bodies)
+        if dynamic < 2 or not np.any(scene.gravity):
+            derived["shock_sweeps"] = 0
+        return cls(**{**derived, **overrides})
 
     def phases(self) -> dict[str, bool]:
         """Which phases of the step run, by name, in step order."""
-        return {"update_velocities": True, "update_positions": True}
+        return {
+            "broad_phase": self.collision_passes > 0 or self.contact_passes > 0
+            or self.shock_sweeps > 0,
+            "collision": self.collision_passes > 0,
+            "update_velocities": True,
+            "contact": self.contact_passes > 0,
+            "shock_propagation": self.shock_sweeps > 0,
+            "update_positions": True,
+        }

@@ -47,7 +47,10 @@ class Geometry(NamedTuple):
     body_bound_center (n, 3) m and body_bound_half (n, 3) m: a box in the body frame holding
         the body; body_unbounded (n,) int32: 1 for bodies with no bounds (planes);
     grid_offset (M,) int32, grid_shape (M, 3) int32 (nodes per axis), grid_origin (M, 3) m,
-        grid_spacing (M,) m, grid_values (sum of nodes,) m: the meshes' sampled phi.
+        grid_spacing (M,) m, grid_values (sum of nodes,) m: the meshes' sampled phi;
+    mesh_triangle_start (M + 1,) int32, mesh_triangles (T, 3) int32 and mesh_vertices (V, 3) m:
+        mesh m's triangles are mesh_triangles[mesh_triangle_start[m] : mesh_triangle_start[m+1]],
+        indices into mesh_vertices (the mesh's frame), for exact distances outside its grid.
     """
 
     geom_body: np.ndarray
@@ -68,6 +71,9 @@ class Geometry(NamedTuple):
     grid_origin: np.ndarray
     grid_spacing: np.ndarray
     grid_values: np.ndarray
+    mesh_triangle_start: np.ndarray
+    mesh_triangles: np.ndarray
+    mesh_vertices: np.ndarray
 
 
 class _Grid(NamedTuple):
@@ -155,6 +161,7 @@ def compile_geometry(bodies, edge_segments: int) -> Geometry:
     body_geom_start, sample_start, samples, vertex_count = [0], [0], [], []
     bound_center, bound_half, unbounded = [], [], []
     grids: list[_Grid] = []
+    grid_meshes: list[Mesh] = []
     grid_of_mesh: dict[int, int] = {}
     for body in bodies:
         parts = primitives(body.shape, body.body_from_shape)
@@ -165,6 +172,7 @@ def compile_geometry(bodies, edge_segments: int) -> Geometry:
                 if id(shape) not in grid_of_mesh:
                     grid_of_mesh[id(shape)] = len(grids)
                     grids.append(mesh_grid(shape))
+                    grid_meshes.append(shape)
                 grid_spacing = grids[grid_of_mesh[id(shape)]].spacing
             local = surface_samples(shape, edge_segments, grid_spacing)
             points = pose.apply(local) if len(local) else local
@@ -199,6 +207,8 @@ def compile_geometry(bodies, edge_segments: int) -> Geometry:
             bound_center.append(0.5 * (lo + hi))
             bound_half.append(0.5 * (hi - lo))
     offsets = np.cumsum([0] + [len(g.values) for g in grids])[:-1]
+    vertex_offsets = np.cumsum([0] + [len(m.vertices) for m in grid_meshes])
+    triangles = [m.triangles + o for m, o in zip(grid_meshes, vertex_offsets)]
     f64 = lambda a, shape: np.ascontiguousarray(np.array(a, dtype=np.float64).reshape(shape))  # noqa: E731
     i32 = lambda a: np.ascontiguousarray(np.array(a, dtype=np.int32))  # noqa: E731
     return Geometry(
@@ -213,6 +223,9 @@ def compile_geometry(bodies, edge_segments: int) -> Geometry:
         grid_origin=f64([g.origin for g in grids], (-1, 3)),
         grid_spacing=f64([g.spacing for g in grids], (-1,)),
         grid_values=f64(np.concatenate([g.values for g in grids]) if grids else [], (-1,)),
+        mesh_triangle_start=i32(np.cumsum([0] + [len(m.triangles) for m in grid_meshes])),
+        mesh_triangles=i32(np.concatenate(triangles) if triangles else np.zeros((0, 3))),
+        mesh_vertices=f64([v for m in grid_meshes for v in m.vertices], (-1, 3)),
     )
 
 
@@ -225,3 +238,15 @@ def _extent_points(shape, pose: Pose) -> np.ndarray:
     if isinstance(shape, Mesh):
         corners = shape.vertices
     return pose.apply(corners)
+
+
+def max_pair_contacts(geometry: Geometry) -> int:
+    """An upper bound on the contacts ``collide_bodies`` can return for any pair of bodies, so
+    solver buffers sized by it never overflow: per geom pair at most the samples of both geoms
+    plus 8 (box-box clipping) plus the capsule core samples."""
+    from rigid_gym.kernels.narrowphase import CAPSULE_CORE_SAMPLES
+
+    per_geom = np.diff(geometry.sample_start) + 8 + CAPSULE_CORE_SAMPLES
+    per_body = np.add.reduceat(per_geom, geometry.body_geom_start[:-1]) if len(per_geom) else per_geom
+    geoms = np.diff(geometry.body_geom_start)
+    return int(2 * geoms.max() * per_body.max())

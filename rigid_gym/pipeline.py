@@ -1,8 +1,7 @@
 """The step, phase by phase (Guendelman, Bridson & Fedkiw 2003, as in DESIGN.md §4).
 
 Each phase is one kernel call over every world at once; ``SolverConfig`` switches phases off
-and ``Profile`` (optional) times them. Reading this function top to bottom is reading the
-algorithm.
+and ``Profile`` times them. Reading :func:`step` top to bottom is reading the algorithm.
 """
 
 from __future__ import annotations
@@ -10,8 +9,10 @@ from __future__ import annotations
 import time
 from collections import defaultdict
 
+import numpy as np
+
 from rigid_gym.config import SolverConfig
-from rigid_gym.kernels import integrate
+from rigid_gym.kernels import integrate, solver
 
 
 class Profile:
@@ -28,25 +29,33 @@ class Profile:
         self.calls[name] += 1
 
 
-def _call(profile: Profile | None, name: str, fn, *args) -> None:
-    if profile is None:
-        fn(*args)
-    else:
-        profile.run(name, fn, *args)
-
-
-def step(state, model, config: SolverConfig, dt: float, profile: Profile | None = None) -> None:
-    """Advance every world in ``state`` by ``dt`` seconds, in place.
-
-    state: :class:`rigid_gym.world.State`; model: :class:`rigid_gym.world.Model`.
-    """
-    s, m = state, model
-    # velocity update: V += dt (g + F/M), L += dt tau
-    _call(profile, "update_velocities", integrate.update_velocities,
-          s.velocity, s.angular_momentum, s.angular_velocity, s.rotation, s.force, s.torque,
-          m.inverse_mass, m.inverse_moments, m.motion, m.gravity, dt)
-    # position update with the final velocities: X += dt V, q advanced by the exact rotation
-    _call(profile, "update_positions", integrate.update_positions,
-          s.position, s.orientation, s.velocity, s.angular_momentum, s.angular_velocity,
-          s.rotation, s.torque, m.inverse_moments, m.motion, dt,
-          config.rotation_order)
+def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
+    """Advance every world of ``world`` (a :class:`rigid_gym.World`) by ``dt`` seconds."""
+    s, m, geo, pairs = world.state, world.model, world.geometry, world.collider
+    on = config.phases()
+    gravity = float(np.linalg.norm(m.gravity))
+    capacity = world.pair_contact_capacity
+    # 0. broad phase: every pair whose boxes may meet within this step (velocities included)
+    if on["broad_phase"]:
+        profile.run("broad_phase", pairs.find_pairs, s, 0.0, dt, gravity)
+    # 1. collision: at poses predicted with the old velocities, real restitution
+    if on["collision"]:
+        profile.run("collision", solver.resolve_contacts, s, m, geo, pairs.pair_a, pairs.pair_b,
+                    pairs.pair_count, dt, solver.COLLISION, config.collision_passes, capacity)
+    # 2. velocity update: V += dt (g + F/M), L += dt tau
+    profile.run("update_velocities", integrate.update_velocities,
+                s.velocity, s.angular_momentum, s.angular_velocity, s.rotation, s.force, s.torque,
+                m.inverse_mass, m.inverse_moments, m.motion, m.gravity, dt)
+    # 3. contact: predicted with the new velocities, restitution ramping from -0.9 to 0
+    if on["contact"]:
+        profile.run("contact", solver.resolve_contacts, s, m, geo, pairs.pair_a, pairs.pair_b,
+                    pairs.pair_count, dt, solver.CONTACT, config.contact_passes, capacity)
+    # 4. shock propagation: level by level from the ground up, lower levels frozen
+    if on["shock_propagation"]:
+        up = -m.gravity / gravity
+        profile.run("shock_propagation", solver.propagate_shock, s, m, geo, pairs.pair_a,
+                    pairs.pair_b, pairs.pair_count, dt, up, config.shock_sweeps, capacity)
+    # 5. position update with the final velocities: X += dt V, q by the exact rotation
+    profile.run("update_positions", integrate.update_positions,
+                s.position, s.orientation, s.velocity, s.angular_momentum, s.angular_velocity,
+                s.rotation, s.torque, m.inverse_moments, m.motion, dt, config.rotation_order)

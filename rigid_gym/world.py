@@ -18,7 +18,7 @@ import numpy as np
 
 from rigid_gym import pipeline
 from rigid_gym.collision import Collider, Contacts
-from rigid_gym.geometry import compile_geometry
+from rigid_gym.geometry import compile_geometry, max_pair_contacts
 from rigid_gym import quaternion as quat
 from rigid_gym.config import SolverConfig
 from rigid_gym.kernels import integrate
@@ -50,13 +50,16 @@ class Model(NamedTuple):
     """What stays fixed while stepping.
 
     motion (n,) int32 STATIC/KINEMATIC/DYNAMIC; inverse_mass (B, n) 1/kg;
-    inverse_moments (B, n, 3) principal 1/kg m^2; gravity (3,) m/s^2.
-    Mass properties carry a world axis so they can differ between worlds.
+    inverse_moments (B, n, 3) principal 1/kg m^2; friction (B, n) and restitution (B, n)
+    per body (a pair uses sqrt(mu_a mu_b) and max(e_a, e_b)); gravity (3,) m/s^2.
+    Per-body parameters carry a world axis so they can differ between worlds.
     """
 
     motion: np.ndarray
     inverse_mass: np.ndarray
     inverse_moments: np.ndarray
+    friction: np.ndarray
+    restitution: np.ndarray
     gravity: np.ndarray
 
 
@@ -94,6 +97,7 @@ class World:
         self.geometry = compile_geometry(scene.bodies, self.config.box_edge_segments)
         self.collider = Collider(self.geometry, self.model.motion, self.num_worlds,
                                  self.config.sweep)
+        self.pair_contact_capacity = max_pair_contacts(self.geometry)
         self.state = _build_state(scene, self.num_worlds)
         self._refresh_derived()
         self._initial_state = tuple(a.copy() for a in self.state)
@@ -108,7 +112,7 @@ class World:
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
             raise ValueError(f"World.step: n must be an int >= 0, got {n!r}")
         for _ in range(int(n)):
-            pipeline.step(self.state, self.model, self.config, self.dt, self._profile)
+            pipeline.step(self, self.config, self.dt, self._profile)
             self.state.force.fill(0.0)
             self.state.torque.fill(0.0)
             self.steps += 1
@@ -207,7 +211,7 @@ class World:
         margin = float(margin)
         if not np.isfinite(margin) or margin < 0.0:
             raise ValueError(f"World.contacts: margin must be finite and >= 0 m, got {margin!r}")
-        self.collider.detect(self.state.position, self.state.rotation, margin)
+        self.collider.detect(self.state, margin)
         return self.collider.contacts()
 
     def profile(self) -> dict[str, dict]:
@@ -345,6 +349,8 @@ def _build_model(scene: Scene, num_worlds: int) -> Model:
         motion=np.array([b.motion for b in bodies], dtype=np.int32),
         inverse_mass=np.tile(np.array([b.inverse_mass for b in bodies]), (num_worlds, 1)),
         inverse_moments=np.tile(np.array([b.inverse_moments for b in bodies]), (num_worlds, 1, 1)),
+        friction=np.tile(np.array([b.friction for b in bodies]), (num_worlds, 1)),
+        restitution=np.tile(np.array([b.restitution for b in bodies]), (num_worlds, 1)),
         gravity=scene.gravity.copy(),
     )
 

@@ -15,6 +15,18 @@ from rigid_gym.kernels.jit import kernel, prange
 
 
 @kernel
+def swept_margin(velocity, angular_velocity, geo, i, margin, dt, acceleration):
+    """How far (m) any point of body i can move in dt: |V| dt + |omega| dt (its reach from the
+    centre of mass) + |a| dt^2 for an acceleration bound |a| (gravity), plus ``margin``."""
+    c = geo.body_bound_center[i]
+    e = geo.body_bound_half[i]
+    reach = ((abs(c[0]) + e[0]) ** 2 + (abs(c[1]) + e[1]) ** 2 + (abs(c[2]) + e[2]) ** 2) ** 0.5
+    speed = (velocity[0] ** 2 + velocity[1] ** 2 + velocity[2] ** 2) ** 0.5
+    spin = (angular_velocity[0] ** 2 + angular_velocity[1] ** 2 + angular_velocity[2] ** 2) ** 0.5
+    return margin + dt * (speed + spin * reach + acceleration * dt)
+
+
+@kernel
 def write_bounds(position, rotation, geo, i, margin, out):
     """World box of body i into out (6,) = (lo xyz, hi xyz), grown by ``margin`` (m)."""
     c = geo.body_bound_center[i]
@@ -76,10 +88,13 @@ def sort_pairs(pair_a, pair_b, count, num_bodies):
 
 
 @kernel(parallel=True)
-def find_pairs(position, rotation, motion, geo, margin, sweep, bounds, pair_a, pair_b, pair_count):
-    """Candidate pairs of every world.
+def find_pairs(position, rotation, velocity, angular_velocity, motion, geo, margin, dt,
+               acceleration, sweep, bounds, pair_a, pair_b, pair_count):
+    """Candidate pairs of every world, for poses anywhere within the next dt.
 
-    position (B, n, 3), rotation (B, n, 3, 3): body poses; margin: m added to every box;
+    position (B, n, 3), rotation (B, n, 3, 3), velocity and angular_velocity (B, n, 3): body
+    states; every box is grown by ``swept_margin`` (margin m, dt s, acceleration bound m/s^2;
+    dt = 0 for the current poses only). A plane is tested against the grown boxes too.
     sweep: sort and sweep (True) or brute force; bounds (B, n, 6): scratch;
     pair_a, pair_b (B, P) int32 out; pair_count (B,) int32 out: pairs found (may exceed P,
     in which case only P were written and the caller must grow the buffers).
@@ -89,13 +104,15 @@ def find_pairs(position, rotation, motion, geo, margin, sweep, bounds, pair_a, p
     for w in prange(num_worlds):
         for i in range(n):
             if unbounded[i] == 0:
-                write_bounds(position[w, i], rotation[w, i], geo, i, margin, bounds[w, i])
+                grown = swept_margin(velocity[w, i], angular_velocity[w, i], geo, i, margin, dt,
+                                     acceleration)
+                write_bounds(position[w, i], rotation[w, i], geo, i, grown, bounds[w, i])
         count = 0
         for p in range(n):
             if unbounded[p] == 0:
                 continue
             for i in range(n):
-                if unbounded[i] == 0 and box_below_plane(position[w], rotation[w], bounds[w], i, p, margin):
+                if unbounded[i] == 0 and box_below_plane(position[w], rotation[w], bounds[w], i, p, 0.0):
                     count = add_pair(i, p, motion, pair_a[w], pair_b[w], count)
         if sweep:
             order = np.argsort(bounds[w, :, 0], kind="mergesort")

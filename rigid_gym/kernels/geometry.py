@@ -8,7 +8,9 @@ frame; phi < 0 inside, and the gradient (unit length) is the outward normal.
     CAPSULE  size (r, half_length, -) exact, axis z
     BOX      size (hx, hy, hz)       exact
     MESH     a signed distance sampled on a grid, trilinear inside the grid; outside it, the
-             distance to the grid box plus the value at the nearest grid point
+             distance to the grid box plus the value at the nearest grid point (an upper
+             bound, >= the gap to the box), or, through ``geom_distance_within`` where that
+             gap is small enough to matter, the exact distance to the triangles
     PLANE    the half-space z <= 0   exact
 """
 
@@ -127,3 +129,105 @@ def geom_distance(geo, g, px, py, pz):
     origin = geo.grid_origin[m]
     return grid_distance(geo.grid_values, geo.grid_offset[m], shape[0], shape[1], shape[2],
                          origin[0], origin[1], origin[2], geo.grid_spacing[m], px, py, pz)
+
+
+@kernel
+def axis_gap(p, lo, hi):
+    """How far p lies outside the interval [lo, hi]; 0 inside it."""
+    return lo - p if p < lo else p - hi if p > hi else 0.0
+
+
+@kernel
+def grid_gap(geo, m, px, py, pz):
+    """Distance (m) from p (the mesh's frame) to the box of grid m; 0 inside it."""
+    shape = geo.grid_shape[m]
+    o = geo.grid_origin[m]
+    h = geo.grid_spacing[m]
+    gx = axis_gap(px, o[0], o[0] + (shape[0] - 1) * h)
+    gy = axis_gap(py, o[1], o[1] + (shape[1] - 1) * h)
+    gz = axis_gap(pz, o[2], o[2] + (shape[2] - 1) * h)
+    return math.sqrt(gx * gx + gy * gy + gz * gz)
+
+
+@kernel
+def closest_on_segment(px, py, pz, ax, ay, az, bx, by, bz):
+    """The point of segment [a, b] nearest to p; returns a 3-tuple."""
+    abx, aby, abz = bx - ax, by - ay, bz - az
+    length2 = abx * abx + aby * aby + abz * abz
+    t = 0.0
+    if length2 > 0.0:
+        t = min(max(((px - ax) * abx + (py - ay) * aby + (pz - az) * abz) / length2, 0.0), 1.0)
+    return ax + t * abx, ay + t * aby, az + t * abz
+
+
+@kernel
+def normal_area(ax, ay, az, bx, by, bz, nx, ny, nz):
+    """(a x b) . n: twice the signed area of the triangle (0, a, b) seen along n, times |n|."""
+    return (ay * bz - az * by) * nx + (az * bx - ax * bz) * ny + (ax * by - ay * bx) * nz
+
+
+@kernel
+def closest_on_triangle(px, py, pz, ax, ay, az, bx, by, bz, cx, cy, cz):
+    """The point of triangle (a, b, c) nearest to p: its projection on the plane when that lies
+    inside the triangle, else the nearest point of its edges; returns a 3-tuple."""
+    abx, aby, abz = bx - ax, by - ay, bz - az
+    acx, acy, acz = cx - ax, cy - ay, cz - az
+    nx, ny, nz = aby * acz - abz * acy, abz * acx - abx * acz, abx * acy - aby * acx
+    area2 = nx * nx + ny * ny + nz * nz
+    if area2 > 0.0:
+        s = ((px - ax) * nx + (py - ay) * ny + (pz - az) * nz) / area2
+        qx, qy, qz = px - s * nx, py - s * ny, pz - s * nz
+        # q's barycentric weights, times area2: the sub-triangles opposite a and b
+        u = normal_area(bx - qx, by - qy, bz - qz, cx - qx, cy - qy, cz - qz, nx, ny, nz)
+        v = normal_area(cx - qx, cy - qy, cz - qz, ax - qx, ay - qy, az - qz, nx, ny, nz)
+        if u >= 0.0 and v >= 0.0 and u + v <= area2:
+            return qx, qy, qz
+    rx, ry, rz = closest_on_segment(px, py, pz, ax, ay, az, bx, by, bz)
+    best = (px - rx) ** 2 + (py - ry) ** 2 + (pz - rz) ** 2
+    sx, sy, sz = closest_on_segment(px, py, pz, bx, by, bz, cx, cy, cz)
+    d2 = (px - sx) ** 2 + (py - sy) ** 2 + (pz - sz) ** 2
+    if d2 < best:
+        best, rx, ry, rz = d2, sx, sy, sz
+    sx, sy, sz = closest_on_segment(px, py, pz, cx, cy, cz, ax, ay, az)
+    d2 = (px - sx) ** 2 + (py - sy) ** 2 + (pz - sz) ** 2
+    if d2 < best:
+        rx, ry, rz = sx, sy, sz
+    return rx, ry, rz
+
+
+@kernel
+def mesh_distance(geo, m, px, py, pz):
+    """Exact distance (m) from p (the mesh's frame, outside the mesh) to the triangles of mesh m
+    and its unit gradient, (p - nearest point) / distance; returns (phi, nx, ny, nz). O(T)."""
+    v = geo.mesh_vertices
+    best = math.inf
+    qx, qy, qz = px, py, pz
+    for t in range(geo.mesh_triangle_start[m], geo.mesh_triangle_start[m + 1]):
+        a, b, c = geo.mesh_triangles[t, 0], geo.mesh_triangles[t, 1], geo.mesh_triangles[t, 2]
+        sx, sy, sz = closest_on_triangle(px, py, pz, v[a, 0], v[a, 1], v[a, 2],
+                                         v[b, 0], v[b, 1], v[b, 2], v[c, 0], v[c, 1], v[c, 2])
+        d2 = (px - sx) ** 2 + (py - sy) ** 2 + (pz - sz) ** 2
+        if d2 < best:
+            best, qx, qy, qz = d2, sx, sy, sz
+    d = math.sqrt(best)
+    if d == 0.0:
+        return 0.0, 0.0, 0.0, 1.0
+    return d, (px - qx) / d, (py - qy) / d, (pz - qz) / d
+
+
+@kernel
+def geom_distance_within(geo, g, px, py, pz, reach):
+    """``geom_distance`` for a caller that needs phi only where phi < reach (m).
+
+    Inside a mesh's grid, and for every other type, it is ``geom_distance``. Outside the grid
+    the grid only bounds phi from below (phi >= the gap to the grid box); where that bound is
+    below ``reach`` the point may be a contact (a sphere or capsule core, whose radius can
+    exceed the grid's padding), so phi is computed exactly from the triangles; elsewhere the
+    grid's value (>= reach) is returned and can make no contact.
+    """
+    if geo.geom_type[g] == MESH:
+        m = geo.geom_grid[g]
+        gap = grid_gap(geo, m, px, py, pz)
+        if 0.0 < gap < reach:
+            return mesh_distance(geo, m, px, py, pz)
+    return geom_distance(geo, g, px, py, pz)

@@ -7,10 +7,13 @@ geoms (one of A's, one of B's):
 * sphere/capsule against sphere/capsule: closest points of their cores (a point, a segment)
   in closed form, exact;
 * sphere/capsule against box/mesh/plane: the core's points in the other geom's phi, exact for
-  boxes and planes (their phi is exact), to the grid's accuracy for meshes; a capsule's core
-  is sampled at its two ends against a plane (exact: depth is linear along it) and at
-  ``CAPSULE_CORE_SAMPLES`` points against boxes and meshes (its ends, so that a capsule lying
-  on a face has two contacts, and points between them for edges it crosses);
+  boxes and planes (their phi is exact), to the grid's accuracy for meshes (exact outside the
+  grid, where a core of large radius may lie: ``geom_distance_within``). A capsule's core
+  contributes its two ends (so that a capsule lying on a face has two contacts) and the
+  interior minima of phi along it, for edges it crosses: against a plane none (phi is linear
+  along the core), against a box the one minimum of its convex phi, found by golden-section
+  search (exact), against a mesh the local minima of phi sampled at most a grid cell apart,
+  each refined by golden-section search (the deepest ``CAPSULE_CORE_SAMPLES`` - 2 of them);
 * box against box: separating axes and face clipping in closed form (``boxbox.py``), since
   sampled distances give sideways normals for boxes stacked face to face;
 * box/mesh against mesh/plane, mesh against box: A's surface samples in B's phi and B's in A's (GBF 2003),
@@ -23,10 +26,21 @@ moved by its radius against the normal. The deepest contact of the pair is writt
 import numpy as np
 
 from rigid_gym.kernels.boxbox import collide_boxes
-from rigid_gym.kernels.geometry import BOX, CAPSULE, PLANE, SPHERE, geom_distance
+from rigid_gym.kernels.geometry import BOX, CAPSULE, PLANE, SPHERE, geom_distance_within
 from rigid_gym.kernels.jit import kernel
 
 CAPSULE_CORE_SAMPLES = 5
+"""The most contacts a capsule's core makes with one box or mesh geom: its 2 ends and up to 3
+interior minima of phi along it."""
+CORE_SEARCH_ITERATIONS = 48
+"""Golden-section steps that refine a minimum of phi along a capsule's core; each keeps 0.618
+of the bracket, so 48 of them leave 1e-10 of it."""
+CORE_MINIMUM_TOLERANCE = 1e-9
+"""An interior minimum of phi along a capsule's core is a contact only if it is deeper than
+the ends of its bracket by this much, m: a capsule lying on a face has its two ends only."""
+CORE_MAX_SAMPLES = 256
+"""Cap on the samples of a capsule's core against a mesh (normally one per grid cell of the
+part of the core near the mesh's grid)."""
 
 BOX_CORNERS = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=np.float64)
 """The 8 corners of a box in units of its half extents, in sample order."""
@@ -61,12 +75,13 @@ def rotate(r, vx, vy, vz):
 
 
 @kernel
-def world_point_in_geom(geo, g, xb, rb, wx, wy, wz):
+def world_point_in_geom(geo, g, xb, rb, wx, wy, wz, reach):
     """phi of geom ``g`` (of the body at pose xb, rb) at world point w, and its outward normal
-    in world coordinates; returns (phi, nx, ny, nz)."""
+    in world coordinates; returns (phi, nx, ny, nz). reach: m, phi is needed only below it
+    (``geom_distance_within``)."""
     bx, by, bz = to_local(xb, rb, wx, wy, wz)
     lx, ly, lz = to_local(geo.geom_position[g], geo.geom_rotation[g], bx, by, bz)
-    phi, nx, ny, nz = geom_distance(geo, g, lx, ly, lz)
+    phi, nx, ny, nz = geom_distance_within(geo, g, lx, ly, lz, reach)
     nx, ny, nz = rotate(geo.geom_rotation[g], nx, ny, nz)
     nx, ny, nz = rotate(rb, nx, ny, nz)
     return phi, nx, ny, nz
@@ -147,29 +162,141 @@ def collide_cores(geo, ga, gb, xa, ra, xb, rb, margin, points, normals, depths, 
 
 
 @kernel
+def core_contact(geo, gc, xc, rc, gf, xf, rf, t, sign, margin, points, normals, depths, index,
+                 capacity):
+    """The point at parameter t of sphere/capsule geom gc's core in the phi of geom gf: writes a
+    contact at ``index`` if it is one. Returns (contacts written, 0 or 1; phi there, m)."""
+    radius = geo.geom_size[gc, 0]
+    cx, cy, cz = core_point(geo, gc, xc, rc, t)
+    phi, nx, ny, nz = world_point_in_geom(geo, gf, xf, rf, cx, cy, cz, radius + margin)
+    depth = radius - phi
+    if depth <= -margin:
+        return 0, phi
+    emit(points, normals, depths, index, capacity, cx - radius * nx, cy - radius * ny,
+         cz - radius * nz, sign * nx, sign * ny, sign * nz, depth)
+    return 1, phi
+
+
+@kernel
+def core_phi(geo, gc, xc, rc, gf, xf, rf, t, reach):
+    """phi of geom gf at the point of parameter t on geom gc's core, m."""
+    cx, cy, cz = core_point(geo, gc, xc, rc, t)
+    return world_point_in_geom(geo, gf, xf, rf, cx, cy, cz, reach)[0]
+
+
+@kernel
+def core_minimum(geo, gc, xc, rc, gf, xf, rf, reach, lo, hi):
+    """Golden-section search for the t in [lo, hi] where phi along gc's core is least: the
+    global minimum where phi is convex along the core (a box's), a local one otherwise.
+    Returns (t, phi)."""
+    ratio = 0.6180339887498949
+    c = hi - ratio * (hi - lo)
+    d = lo + ratio * (hi - lo)
+    fc = core_phi(geo, gc, xc, rc, gf, xf, rf, c, reach)
+    fd = core_phi(geo, gc, xc, rc, gf, xf, rf, d, reach)
+    for _ in range(CORE_SEARCH_ITERATIONS):
+        if fc <= fd:
+            hi, d, fd = d, c, fc
+            c = hi - ratio * (hi - lo)
+            fc = core_phi(geo, gc, xc, rc, gf, xf, rf, c, reach)
+        else:
+            lo, c, fc = c, d, fd
+            d = lo + ratio * (hi - lo)
+            fd = core_phi(geo, gc, xc, rc, gf, xf, rf, d, reach)
+    if fc <= fd:
+        return c, fc
+    return d, fd
+
+
+@kernel
+def core_range_near_grid(geo, gc, xc, rc, gf, xf, rf, reach):
+    """The parameters (t0, t1) of the part of capsule gc's core within ``reach`` (m) of mesh
+    gf's grid box (slab clipping in the mesh's frame); t0 > t1 when there is none."""
+    ax, ay, az = core_point(geo, gc, xc, rc, -1.0)
+    bx, by, bz = core_point(geo, gc, xc, rc, 1.0)
+    ax, ay, az = to_local(xf, rf, ax, ay, az)
+    ax, ay, az = to_local(geo.geom_position[gf], geo.geom_rotation[gf], ax, ay, az)
+    bx, by, bz = to_local(xf, rf, bx, by, bz)
+    bx, by, bz = to_local(geo.geom_position[gf], geo.geom_rotation[gf], bx, by, bz)
+    m = geo.geom_grid[gf]
+    h = geo.grid_spacing[m]
+    s0, s1 = 0.0, 1.0
+    for c in range(3):
+        p = ax if c == 0 else ay if c == 1 else az
+        q = bx if c == 0 else by if c == 1 else bz
+        lo = geo.grid_origin[m, c] - reach
+        hi = geo.grid_origin[m, c] + (geo.grid_shape[m, c] - 1) * h + reach
+        if p == q:
+            if p < lo or p > hi:
+                return 1.0, -1.0
+            continue
+        e0, e1 = (lo - p) / (q - p), (hi - p) / (q - p)
+        s0 = max(s0, min(e0, e1))
+        s1 = min(s1, max(e0, e1))
+    return 2.0 * s0 - 1.0, 2.0 * s1 - 1.0
+
+
+@kernel
 def collide_core_with_field(geo, gc, xc, rc, gf, xf, rf, sign, margin, points, normals, depths,
                             index, capacity):
     """Core of sphere/capsule geom gc (pose xc, rc) in the phi of geom gf (pose xf, rf).
 
     sign = +1 when gc belongs to body A (normals are gf's outward normals), -1 when it belongs
-    to B. Returns the number of contacts found.
+    to B. Returns the number of contacts found (see the module docstring).
     """
-    radius = geo.geom_size[gc, 0]
-    samples = 1
-    if geo.geom_type[gc] == CAPSULE:
-        # against a plane the depth is linear along the axis: its ends are the extremes
-        samples = 2 if geo.geom_type[gf] == PLANE else CAPSULE_CORE_SAMPLES
-    found = 0
-    for k in range(samples):
-        t = -1.0 + 2.0 * k / (samples - 1) if samples > 1 else 0.0
-        cx, cy, cz = core_point(geo, gc, xc, rc, t)
-        phi, nx, ny, nz = world_point_in_geom(geo, gf, xf, rf, cx, cy, cz)
-        depth = radius - phi
-        if depth > -margin:
-            emit(points, normals, depths, index + found, capacity, cx - radius * nx,
-                 cy - radius * ny, cz - radius * nz, sign * nx, sign * ny, sign * nz, depth)
-            found += 1
-    return found
+    if geo.geom_type[gc] != CAPSULE:
+        return core_contact(geo, gc, xc, rc, gf, xf, rf, 0.0, sign, margin, points, normals,
+                            depths, index, capacity)[0]
+    found, phi_lo = core_contact(geo, gc, xc, rc, gf, xf, rf, -1.0, sign, margin, points,
+                                 normals, depths, index, capacity)
+    hit, phi_hi = core_contact(geo, gc, xc, rc, gf, xf, rf, 1.0, sign, margin, points, normals,
+                               depths, index + found, capacity)
+    found += hit
+    if geo.geom_type[gf] == PLANE:
+        return found
+    reach = geo.geom_size[gc, 0] + margin
+    if geo.geom_type[gf] == BOX:
+        t, phi = core_minimum(geo, gc, xc, rc, gf, xf, rf, reach, -1.0, 1.0)
+        if phi < min(phi_lo, phi_hi) - CORE_MINIMUM_TOLERANCE and phi < reach:
+            found += core_contact(geo, gc, xc, rc, gf, xf, rf, t, sign, margin, points, normals,
+                                  depths, index + found, capacity)[0]
+        return found
+    # a mesh: local minima of phi sampled at most a grid cell apart along the core near the grid
+    t0, t1 = core_range_near_grid(geo, gc, xc, rc, gf, xf, rf, reach)
+    if t0 >= t1:
+        return found
+    length = (t1 - t0) * geo.geom_size[gc, 1]
+    count = min(max(int(np.ceil(length / geo.grid_spacing[geo.geom_grid[gf]])), 2),
+                CORE_MAX_SAMPLES)
+    step = (t1 - t0) / count
+    interior = 0
+    before = core_phi(geo, gc, xc, rc, gf, xf, rf, t0, reach)
+    here = core_phi(geo, gc, xc, rc, gf, xf, rf, t0 + step, reach)
+    for k in range(1, count):
+        after = core_phi(geo, gc, xc, rc, gf, xf, rf, t0 + (k + 1) * step, reach)
+        if here < before and here <= after and here < reach:
+            t, phi = core_minimum(geo, gc, xc, rc, gf, xf, rf, reach, t0 + (k - 1) * step,
+                                  t0 + (k + 1) * step)
+            if phi < min(before, after) - CORE_MINIMUM_TOLERANCE and phi < reach:
+                # keep the deepest CAPSULE_CORE_SAMPLES - 2: replace the shallowest if full
+                slot = index + found + interior
+                if interior == CAPSULE_CORE_SAMPLES - 2:
+                    slot = -1
+                    end = index + found + interior
+                    if end <= capacity:
+                        slot = index + found
+                        for j in range(index + found + 1, end):
+                            if depths[j] < depths[slot]:
+                                slot = j
+                        if depths[slot] >= geo.geom_size[gc, 0] - phi:
+                            slot = -1
+                else:
+                    interior += 1
+                if slot >= 0:
+                    core_contact(geo, gc, xc, rc, gf, xf, rf, t, sign, margin, points, normals,
+                                 depths, slot, capacity)
+        before, here = here, after
+    return found + interior
 
 
 @kernel
@@ -179,7 +306,7 @@ def sample_in_field(geo, k, xs, rs, gf, xf, rf, sign, margin, points, normals, d
     contact (written at ``index``), else 0."""
     p = geo.sample_points[k]
     wx, wy, wz = to_world(xs, rs, p[0], p[1], p[2])
-    phi, nx, ny, nz = world_point_in_geom(geo, gf, xf, rf, wx, wy, wz)
+    phi, nx, ny, nz = world_point_in_geom(geo, gf, xf, rf, wx, wy, wz, margin)
     if -phi <= -margin:
         return 0
     emit(points, normals, depths, index, capacity, wx, wy, wz, sign * nx, sign * ny, sign * nz, -phi)

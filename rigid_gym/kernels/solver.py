@@ -1,0 +1,408 @@
+"""The impulse phases of the step (Guendelman, Bridson & Fedkiw 2003).
+
+All three work at *predicted* poses: each body is moved ahead by dt with its current velocity
+(X + dt V, q turned by omega dt), contacts are found there, and impulses change velocities only.
+The collision phase, which runs before gravity is added, also moves dynamic bodies by dt^2 g
+when predicting (but still judges approach and sizes impulses with the old velocities): a
+collision that gravity completes within the step then bounces instead of being caught by the
+inelastic contact phase, and a body resting on an incline still sees no approach.
+
+* ``resolve_contacts(..., mode=COLLISION)``: passes over every candidate pair with the pair's
+  real restitution max(e_a, e_b), until a pass applies no impulse.
+* ``resolve_contacts(..., mode=CONTACT)``: the same with restitution ramping from
+  ``CONTACT_RESTITUTION_START`` (about -0.9: negative e only slows the approach) to 0 on the
+  last pass, which stops rattling.
+* ``propagate_shock``: builds the contact graph (an edge from each supporting body to the body
+  it supports, judged by the contact normal against gravity; side contacts both ways), collapses
+  its cycles (Tarjan's strongly connected components), orders it into levels from the ground
+  up, and resolves level by level with everything below frozen (infinite mass). Leftover
+  approach can then only push upper bodies: a stack cannot sink.
+
+Within a pair, approaching contacts are grouped into patches of similar normal and each patch
+gets one impulse at its centroid (see ``resolve_pair``).
+"""
+
+from collections import namedtuple
+
+import math
+
+import numpy as np
+
+from rigid_gym.kernels.impulse import (
+    add_point_mass_matrix,
+    apply_body_impulse,
+    contact_impulse,
+    point_velocity,
+)
+from rigid_gym.kernels.integrate import DYNAMIC, STATIC
+from rigid_gym.kernels.jit import kernel, prange
+from rigid_gym.kernels.narrowphase import collide_bodies
+from rigid_gym.kernels.quaternion import (
+    apply_inverse_inertia,
+    rotate_by_angular_velocity,
+    rotation_from_quaternion,
+)
+
+COLLISION = 0
+CONTACT = 1
+SHOCK = 2
+CONTACT_RESTITUTION_START = -0.9
+SIDE_CONTACT = 0.1
+"""Contacts whose normal is within this cosine of horizontal do not say which body is below:
+the two bodies are put on the same level."""
+
+NOT_TOUCHING = 1 << 62
+
+PATCH_COS = 0.95
+"""Contacts of a pair whose normals agree within this cosine form one patch (one impulse)."""
+
+Scratch = namedtuple("Scratch", "position quaternion rotation point normal depth used group k box")
+
+
+@kernel
+def make_scratch(num_bodies, capacity):
+    """Work arrays for one world: predicted poses (n, 3), (n, 4), (n, 3, 3), one pair's
+    contacts (capacity, 3), (capacity, 3), (capacity,), a 3x3 matrix and box-clipping space."""
+    return Scratch(np.empty((num_bodies, 3)), np.empty((num_bodies, 4)),
+                   np.empty((num_bodies, 3, 3)), np.empty((capacity, 3)),
+                   np.empty((capacity, 3)), np.empty(capacity), np.empty(capacity, dtype=np.bool_),
+                   np.empty(capacity, dtype=np.int64), np.empty((3, 3)), np.empty((3, 16, 3)))
+
+
+@kernel
+def predict_pose(state, model, w, i, dt, lookahead, scratch):
+    """Body i's pose after dt at its current velocity, into the scratch rows of i. Dynamic
+    bodies also move by ``lookahead`` (3,) m: the collision phase passes dt^2 g, so that a
+    collision that gravity brings about within this step is seen (and bounced) there."""
+    x = scratch.position[i]
+    q = scratch.quaternion[i]
+    for c in range(3):
+        x[c] = state.position[w, i, c]
+    for c in range(4):
+        q[c] = state.orientation[w, i, c]
+    if model.motion[i] == DYNAMIC:
+        for c in range(3):
+            x[c] += lookahead[c]
+    if model.motion[i] != STATIC:
+        for c in range(3):
+            x[c] += dt * state.velocity[w, i, c]
+        rotate_by_angular_velocity(q, state.angular_velocity[w, i, 0],
+                                   state.angular_velocity[w, i, 1],
+                                   state.angular_velocity[w, i, 2], dt)
+    rotation_from_quaternion(q, scratch.rotation[i])
+
+
+@kernel
+def find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, scratch):
+    """Contacts of bodies a, b at their predicted poses, deepest first; returns the count."""
+    predict_pose(state, model, w, a, dt, lookahead, scratch)
+    predict_pose(state, model, w, b, dt, lookahead, scratch)
+    return collide_bodies(geo, a, b, scratch.position[a], scratch.rotation[a],
+                          scratch.position[b], scratch.rotation[b], 0.0, scratch.point,
+                          scratch.normal, scratch.depth, 0, scratch.depth.shape[0], scratch.box)
+
+
+@kernel
+def relative_velocity(state, w, a, b, scratch, px, py, pz):
+    """v_a - v_b at world point p, each body's lever arm taken from its predicted centre."""
+    rax, ray, raz = px - scratch.position[a, 0], py - scratch.position[a, 1], pz - scratch.position[a, 2]
+    rbx, rby, rbz = px - scratch.position[b, 0], py - scratch.position[b, 1], pz - scratch.position[b, 2]
+    vax, vay, vaz = point_velocity(state.velocity[w, a], state.angular_velocity[w, a], rax, ray, raz)
+    vbx, vby, vbz = point_velocity(state.velocity[w, b], state.angular_velocity[w, b], rbx, rby, rbz)
+    return vax - vbx, vay - vby, vaz - vbz
+
+
+@kernel
+def gather_patch(scratch, seed, count):
+    """Group the approaching contacts whose normals are within PATCH_COS of contact ``seed``'s
+    into one patch (marking them used). Weights are the approach speeds -v_n (kept in
+    scratch.depth). Returns (centroid xyz, unit normal xyz, mean distance of the patch's points
+    from the centroid)."""
+    seed_n = scratch.normal[seed]
+    total = cx = cy = cz = nx = ny = nz = 0.0
+    for i in range(seed, count):
+        n = scratch.normal[i]
+        if scratch.used[i] or scratch.depth[i] >= 0.0:
+            continue
+        if n[0] * seed_n[0] + n[1] * seed_n[1] + n[2] * seed_n[2] < PATCH_COS:
+            continue
+        weight = -scratch.depth[i]
+        scratch.used[i] = True
+        total += weight
+        cx += weight * scratch.point[i, 0]
+        cy += weight * scratch.point[i, 1]
+        cz += weight * scratch.point[i, 2]
+        nx += weight * n[0]
+        ny += weight * n[1]
+        nz += weight * n[2]
+    cx, cy, cz = cx / total, cy / total, cz / total
+    norm = math.sqrt(nx * nx + ny * ny + nz * nz)
+    radius = 0.0
+    for i in range(seed, count):
+        if scratch.used[i] and scratch.depth[i] < 0.0 and scratch.group[i] < 0:
+            scratch.group[i] = seed
+            dx, dy, dz = scratch.point[i, 0] - cx, scratch.point[i, 1] - cy, scratch.point[i, 2] - cz
+            radius += -scratch.depth[i] * math.sqrt(dx * dx + dy * dy + dz * dz)
+    return cx, cy, cz, nx / norm, ny / norm, nz / norm, radius / total
+
+
+@kernel
+def resolve_pair(state, model, geo, w, a, b, dt, lookahead, mode, ramp_e, movable_a, movable_b,
+                 scratch):
+    """Resolve the approaching contacts of the pair (a, b) at their predicted poses; returns
+    the number of impulses applied.
+
+    The contacts are grouped into patches of similar normal (a face resting on a face is one
+    patch). Each patch gets one impulse (``impulse.contact_impulse``) at the centroid of its
+    points, weighted by their approach speed, along their mean normal, and a torsional friction
+    impulse about the normal that stops relative spin, bounded by mu j_n r (r: the points' mean
+    distance from the centroid). One impulse per patch, not one per point, is what lets a box
+    on a face come exactly to rest: sequential point impulses leave it rocking, and their
+    order biases it sideways.
+    mode COLLISION uses the pair's restitution, CONTACT uses ``ramp_e``, SHOCK uses 0.
+    movable_a/b: False treats the body as infinite mass (kinematic, static, or frozen).
+    """
+    count = find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, scratch)
+    if count == 0:
+        return 0
+    if mode == COLLISION:
+        e = max(model.restitution[w, a], model.restitution[w, b])
+    elif mode == CONTACT:
+        e = ramp_e
+    else:
+        e = 0.0
+    mu = math.sqrt(model.friction[w, a] * model.friction[w, b])
+    # approach speed of every contact, kept in scratch.depth (negative: approaching)
+    for i in range(count):
+        p = scratch.point[i]
+        n = scratch.normal[i]
+        vx, vy, vz = relative_velocity(state, w, a, b, scratch, p[0], p[1], p[2])
+        scratch.depth[i] = vx * n[0] + vy * n[1] + vz * n[2]
+        scratch.used[i] = False
+        scratch.group[i] = -1
+    applied = 0
+    k = scratch.k
+    for seed in range(count):
+        if scratch.used[seed] or scratch.depth[seed] >= 0.0:
+            continue
+        cx, cy, cz, nx, ny, nz, radius = gather_patch(scratch, seed, count)
+        vx, vy, vz = relative_velocity(state, w, a, b, scratch, cx, cy, cz)
+        if vx * nx + vy * ny + vz * nz >= 0.0:
+            continue
+        rax, ray, raz = cx - scratch.position[a, 0], cy - scratch.position[a, 1], cz - scratch.position[a, 2]
+        rbx, rby, rbz = cx - scratch.position[b, 0], cy - scratch.position[b, 1], cz - scratch.position[b, 2]
+        k[:, :] = 0.0
+        if movable_a:
+            add_point_mass_matrix(model.inverse_mass[w, a], state.rotation[w, a],
+                                  model.inverse_moments[w, a], rax, ray, raz, k)
+        if movable_b:
+            add_point_mass_matrix(model.inverse_mass[w, b], state.rotation[w, b],
+                                  model.inverse_moments[w, b], rbx, rby, rbz, k)
+        jx, jy, jz = contact_impulse(k, vx, vy, vz, nx, ny, nz, e, mu)
+        if movable_a:
+            apply_body_impulse(state.velocity[w, a], state.angular_momentum[w, a],
+                               state.angular_velocity[w, a], state.rotation[w, a],
+                               model.inverse_mass[w, a], model.inverse_moments[w, a],
+                               jx, jy, jz, rax, ray, raz)
+        if movable_b:
+            apply_body_impulse(state.velocity[w, b], state.angular_momentum[w, b],
+                               state.angular_velocity[w, b], state.rotation[w, b],
+                               model.inverse_mass[w, b], model.inverse_moments[w, b],
+                               -jx, -jy, -jz, rbx, rby, rbz)
+        if mu > 0.0 and radius > 0.0:
+            limit = mu * (jx * nx + jy * ny + jz * nz) * radius
+            apply_torsional_friction(state, model, w, a, b, movable_a, movable_b, nx, ny, nz, limit)
+        applied += 1
+    return applied
+
+
+@kernel
+def apply_torsional_friction(state, model, w, a, b, movable_a, movable_b, nx, ny, nz, limit):
+    """Angular impulse t n (on a; -t n on b) that stops the bodies' relative spin about n,
+    |t| <= limit (N m s)."""
+    spin = ((state.angular_velocity[w, a, 0] - state.angular_velocity[w, b, 0]) * nx
+            + (state.angular_velocity[w, a, 1] - state.angular_velocity[w, b, 1]) * ny
+            + (state.angular_velocity[w, a, 2] - state.angular_velocity[w, b, 2]) * nz)
+    compliance = 0.0
+    if movable_a:
+        ix, iy, iz = apply_inverse_inertia(state.rotation[w, a], model.inverse_moments[w, a], nx, ny, nz)
+        compliance += ix * nx + iy * ny + iz * nz
+    if movable_b:
+        ix, iy, iz = apply_inverse_inertia(state.rotation[w, b], model.inverse_moments[w, b], nx, ny, nz)
+        compliance += ix * nx + iy * ny + iz * nz
+    if compliance <= 0.0:
+        return
+    t = min(max(-spin / compliance, -limit), limit)
+    for i, sign, movable in ((a, 1.0, movable_a), (b, -1.0, movable_b)):
+        if movable:
+            for c in range(3):
+                state.angular_momentum[w, i, c] += sign * t * (nx, ny, nz)[c]
+            ox, oy, oz = apply_inverse_inertia(state.rotation[w, i], model.inverse_moments[w, i],
+                                               state.angular_momentum[w, i, 0],
+                                               state.angular_momentum[w, i, 1],
+                                               state.angular_momentum[w, i, 2])
+            state.angular_velocity[w, i, 0] = ox
+            state.angular_velocity[w, i, 1] = oy
+            state.angular_velocity[w, i, 2] = oz
+
+
+@kernel(parallel=True)
+def resolve_contacts(state, model, geo, pair_a, pair_b, pair_count, dt, mode, passes, capacity):
+    """The collision (mode COLLISION) or contact (mode CONTACT) phase for every world:
+    up to ``passes`` sweeps over the candidate pairs, stopping early when a sweep applies no
+    impulse. capacity: the most contacts one pair can have."""
+    num_worlds, n = state.position.shape[0], state.position.shape[1]
+    lookahead = np.zeros(3)
+    if mode == COLLISION:
+        for c in range(3):
+            lookahead[c] = dt * dt * model.gravity[c]
+    for w in prange(num_worlds):
+        scratch = make_scratch(n, capacity)
+        for p in range(passes):
+            ramp_e = CONTACT_RESTITUTION_START * (1.0 - (p + 1.0) / passes)
+            applied = 0
+            for k in range(pair_count[w]):
+                a, b = pair_a[w, k], pair_b[w, k]
+                applied += resolve_pair(state, model, geo, w, a, b, dt, lookahead, mode, ramp_e,
+                                        model.motion[a] == DYNAMIC, model.motion[b] == DYNAMIC,
+                                        scratch)
+            if applied == 0:
+                break
+
+
+@kernel
+def strongly_connected_components(n, edge_start, edge_to, component):
+    """Tarjan's algorithm without recursion over the graph with node v's successors
+    edge_to[edge_start[v]:edge_start[v + 1]]. Writes component[v] and returns the count.
+    Components come out in reverse topological order: an edge between components always
+    goes from a higher number to a lower one."""
+    index = np.full(n, -1, dtype=np.int64)
+    low = np.zeros(n, dtype=np.int64)
+    on_stack = np.zeros(n, dtype=np.bool_)
+    stack = np.empty(n, dtype=np.int64)
+    calls = np.empty(n, dtype=np.int64)
+    next_edge = np.empty(n, dtype=np.int64)
+    counter = 0
+    count = 0
+    top = 0
+    for root in range(n):
+        if index[root] >= 0:
+            continue
+        depth = 0
+        v = root
+        while True:
+            if index[v] < 0:  # first visit
+                index[v] = low[v] = counter
+                counter += 1
+                stack[top] = v
+                top += 1
+                on_stack[v] = True
+                next_edge[v] = edge_start[v]
+                calls[depth] = v
+                depth += 1
+            v = calls[depth - 1]
+            if next_edge[v] < edge_start[v + 1]:
+                u = edge_to[next_edge[v]]
+                next_edge[v] += 1
+                if index[u] < 0:
+                    v = u
+                    continue
+                if on_stack[u]:
+                    low[v] = min(low[v], index[u])
+                continue
+            if low[v] == index[v]:
+                while True:
+                    top -= 1
+                    x = stack[top]
+                    on_stack[x] = False
+                    component[x] = count
+                    if x == v:
+                        break
+                count += 1
+            depth -= 1
+            if depth == 0:
+                break
+            parent = calls[depth - 1]
+            low[parent] = min(low[parent], low[v])
+            v = parent
+    return count
+
+
+@kernel
+def contact_levels(n, motion, edge_from, edge_to, num_edges, level):
+    """level[v] for every body: 0 for static and kinematic bodies; for dynamic ones
+    1 + the highest level among the bodies supporting it (cycles share one level)."""
+    order = np.argsort(edge_from[:num_edges], kind="mergesort")
+    edge_start = np.zeros(n + 1, dtype=np.int64)
+    targets = np.empty(num_edges, dtype=np.int64)
+    for k in range(num_edges):
+        edge_start[edge_from[k] + 1] += 1
+    for v in range(n):
+        edge_start[v + 1] += edge_start[v]
+    for k in range(num_edges):
+        targets[k] = edge_to[order[k]]
+    component = np.empty(n, dtype=np.int64)
+    count = strongly_connected_components(n, edge_start, targets, component)
+    component_level = np.ones(count, dtype=np.int64)
+    by_component = np.argsort(-component, kind="mergesort")  # topological order
+    for v in by_component:
+        c = component[v]
+        for k in range(edge_start[v], edge_start[v + 1]):
+            u = targets[k]
+            if component[u] != c:
+                component_level[component[u]] = max(component_level[component[u]],
+                                                     component_level[c] + 1)
+    for v in range(n):
+        level[v] = component_level[component[v]] if motion[v] == DYNAMIC else 0
+
+
+@kernel(parallel=True)
+def propagate_shock(state, model, geo, pair_a, pair_b, pair_count, dt, up, sweeps, capacity):
+    """The shock-propagation phase for every world (see the module docstring).
+
+    up: (3,) unit vector against gravity; sweeps: passes over each level's pairs."""
+    num_worlds, n = state.position.shape[0], state.position.shape[1]
+    lookahead = np.zeros(3)
+    for w in prange(num_worlds):
+        scratch = make_scratch(n, capacity)
+        pairs = pair_count[w]
+        touching = np.zeros(pairs, dtype=np.bool_)
+        edge_from = np.empty(2 * pairs, dtype=np.int64)
+        edge_to = np.empty(2 * pairs, dtype=np.int64)
+        edges = 0
+        for k in range(pairs):
+            a, b = pair_a[w, k], pair_b[w, k]
+            if find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, scratch) == 0:
+                continue
+            touching[k] = True
+            if model.motion[b] != DYNAMIC:
+                continue  # b is the ground or a gripper: a rests on level 0
+            rise = (scratch.normal[0, 0] * up[0] + scratch.normal[0, 1] * up[1]
+                    + scratch.normal[0, 2] * up[2])
+            if rise > -SIDE_CONTACT:  # b below a (or beside it)
+                edge_from[edges], edge_to[edges] = b, a
+                edges += 1
+            if rise < SIDE_CONTACT:  # a below b (or beside it)
+                edge_from[edges], edge_to[edges] = a, b
+                edges += 1
+        level = np.empty(n, dtype=np.int64)
+        contact_levels(n, model.motion, edge_from, edge_to, edges, level)
+        pair_level = np.full(pairs, NOT_TOUCHING, dtype=np.int64)
+        for k in range(pairs):
+            if touching[k]:
+                pair_level[k] = max(level[pair_a[w, k]], level[pair_b[w, k]])
+        order = np.argsort(pair_level, kind="mergesort")
+        start = 0
+        while start < pairs and touching[order[start]]:
+            current = pair_level[order[start]]
+            end = start
+            while end < pairs and touching[order[end]] and pair_level[order[end]] == current:
+                end += 1
+            for _ in range(sweeps):
+                for s in range(start, end):
+                    k = order[s]
+                    a, b = pair_a[w, k], pair_b[w, k]
+                    resolve_pair(state, model, geo, w, a, b, dt, lookahead, SHOCK, 0.0,
+                                 model.motion[a] == DYNAMIC and level[a] == current,
+                                 model.motion[b] == DYNAMIC and level[b] == current, scratch)
+            start = end
