@@ -26,7 +26,8 @@ class SolverConfig:
         switches the phase off. It can only matter when some restitution is > 0.
     contact_passes: sweeps of the contact phase (restitution ramping from -0.9 to 0).
     shock_sweeps: sweeps per level of shock propagation; 0 switches it off. It only matters
-        where a body can rest on another under gravity.
+        where a body can rest on another (or on the ground) under gravity; resting contact
+        is made exact there (``kernels/patch.py``).
     rotation_order: 1 = the exact-rotation update of the course notes with omega at the start
         of the step (first order); 2 = Buss's second-order update (omega + h/2 alpha);
         3 = Buss's third-order update. Cost grows slightly with the order.
@@ -62,7 +63,7 @@ class SolverConfig:
     def for_scene(cls, scene: Scene, **overrides) -> SolverConfig:
         """The default configuration with what ``scene`` cannot need switched off:
         no collision phase when every restitution is 0; no shock propagation without gravity
-        or with fewer than two dynamic bodies (nothing can rest on anything but the ground).
+        or when nothing can rest on anything (no dynamic body, or one alone in empty space).
         ``overrides`` (any field) win over both."""
         from rigid_gym.kernels.integrate import DYNAMIC
 
@@ -75,7 +76,8 @@ class SolverConfig:
         if all(b.restitution == 0.0 for b in scene.bodies):
             derived["collision_passes"] = 0
         dynamic = sum(b.motion == DYNAMIC for b in scene.bodies)
-        if dynamic < 2 or not np.any(scene.gravity):
+        supports = len(scene.bodies) - dynamic
+        if not np.any(scene.gravity) or dynamic == 0 or (dynamic == 1 and supports == 0):
             derived["shock_sweeps"] = 0
         return cls(**{**derived, **overrides})
 

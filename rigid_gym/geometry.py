@@ -12,9 +12,12 @@ answers a signed distance phi (``kernels/geometry.py``) and carries *surface sam
     Plane  none (it is only ever the static ground)
 
 A Mesh's phi is its exact signed distance sampled on a grid with ``Mesh.sdf_resolution`` cells
-along its longest side and two cells of padding. A mesh's samples that lie inside another part
-of the same Compound are dropped (they are not on the body's surface); a box keeps its fixed
-layout (corners, then the 12 edges' samples), which the narrow phase relies on.
+along its longest side and two cells of padding; outside the grid, where a sphere's or capsule's
+core (its radius beyond the padding) can still be within reach, the narrow phase measures the
+exact distance to the mesh's triangles, which are kept for that. A mesh's samples that lie
+inside another part of the same Compound are dropped (they are not on the body's surface); a
+box keeps its fixed layout (corners, then the 12 edges' samples), which the narrow phase
+relies on.
 """
 
 from __future__ import annotations

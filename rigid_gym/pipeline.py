@@ -14,6 +14,11 @@ import numpy as np
 from rigid_gym.config import SolverConfig
 from rigid_gym.kernels import integrate, solver
 
+SUPPORT_CONTACTS = 4
+"""Room for one body's contacts with its frozen supports in shock propagation, in pair
+capacities (a box on up to 4 boxes combines them all; beyond that supports are resolved
+one by one)."""
+
 
 class Profile:
     """Accumulated wall time (s) and call count per phase."""
@@ -54,7 +59,8 @@ def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
     if on["shock_propagation"]:
         up = -m.gravity / gravity
         profile.run("shock_propagation", solver.propagate_shock, s, m, geo, pairs.pair_a,
-                    pairs.pair_b, pairs.pair_count, dt, up, config.shock_sweeps, capacity)
+                    pairs.pair_b, pairs.pair_count, dt, up, config.shock_sweeps, capacity,
+                    SUPPORT_CONTACTS * capacity)
     # 5. position update with the final velocities: X += dt V, q by the exact rotation
     profile.run("update_positions", integrate.update_positions,
                 s.position, s.orientation, s.velocity, s.angular_momentum, s.angular_velocity,

@@ -37,8 +37,9 @@ from rigid_gym.kernels.impulse import (
 from rigid_gym.kernels.integrate import DYNAMIC, STATIC
 from rigid_gym.kernels.jit import kernel, prange
 from rigid_gym.kernels.narrowphase import collide_bodies
+from rigid_gym.kernels.patch import APPLIED, SEPARATING, resolve_patch, spin_friction
 from rigid_gym.kernels.quaternion import (
-    apply_inverse_inertia,
+    cross,
     rotate_by_angular_velocity,
     rotation_from_quaternion,
 )
@@ -51,22 +52,33 @@ SIDE_CONTACT = 0.1
 """Contacts whose normal is within this cosine of horizontal do not say which body is below:
 the two bodies are put on the same level."""
 
-NOT_TOUCHING = 1 << 62
-
+GRAPH_MARGIN = 1e-4
+"""Bodies closer than this (m) at the predicted poses count as touching in shock propagation:
+in the contact graph (bodies falling together touch without overlapping, yet the upper one
+rests on the lower) and in a body's patches against its frozen supports (a rocking box's
+lifting corners belong to the face it rests on; the patch wrench decides whether the patch
+holds, j_n > 0, or separates)."""
+SAME_MOTION = 1e-9
+"""Supports whose velocity fields differ by less than this (m/s, rad/s) move as one: their
+contacts can share a patch (the seed partner's velocity field is used for all of them)."""
 PATCH_COS = 0.95
 """Contacts of a pair whose normals agree within this cosine form one patch (one impulse)."""
 
-Scratch = namedtuple("Scratch", "position quaternion rotation point normal depth used group k box")
+Scratch = namedtuple("Scratch", "position quaternion rotation point normal depth group partner k "
+                                "box directions wrench system rhs solution work")
 
 
 @kernel
 def make_scratch(num_bodies, capacity):
-    """Work arrays for one world: predicted poses (n, 3), (n, 4), (n, 3, 3), one pair's
-    contacts (capacity, 3), (capacity, 3), (capacity,), a 3x3 matrix and box-clipping space."""
+    """Work arrays for one world: predicted poses (n, 3), (n, 4), (n, 3, 3); contacts
+    (capacity, 3), (capacity, 3), (capacity,) with their patch and partner bookkeeping; a 3x3
+    matrix; box-clipping space; and the patch solve's directions, 6x6 systems and vectors."""
     return Scratch(np.empty((num_bodies, 3)), np.empty((num_bodies, 4)),
                    np.empty((num_bodies, 3, 3)), np.empty((capacity, 3)),
-                   np.empty((capacity, 3)), np.empty(capacity), np.empty(capacity, dtype=np.bool_),
-                   np.empty(capacity, dtype=np.int64), np.empty((3, 3)), np.empty((3, 16, 3)))
+                   np.empty((capacity, 3)), np.empty(capacity), np.empty(capacity, dtype=np.int64),
+                   np.empty(capacity, dtype=np.int64), np.empty((3, 3)), np.empty((3, 16, 3)),
+                   np.empty((3, 3)), np.empty((6, 6)), np.empty((6, 6)), np.empty(6), np.empty(6),
+                   np.empty((2, 3, 3)))
 
 
 @kernel
@@ -93,12 +105,13 @@ def predict_pose(state, model, w, i, dt, lookahead, scratch):
 
 
 @kernel
-def find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, scratch):
-    """Contacts of bodies a, b at their predicted poses, deepest first; returns the count."""
+def find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, margin, scratch):
+    """Contacts of bodies a, b at their predicted poses, deepest first (those deeper than
+    -margin, m); returns the count."""
     predict_pose(state, model, w, a, dt, lookahead, scratch)
     predict_pose(state, model, w, b, dt, lookahead, scratch)
     return collide_bodies(geo, a, b, scratch.position[a], scratch.rotation[a],
-                          scratch.position[b], scratch.rotation[b], 0.0, scratch.point,
+                          scratch.position[b], scratch.rotation[b], margin, scratch.point,
                           scratch.normal, scratch.depth, 0, scratch.depth.shape[0], scratch.box)
 
 
@@ -113,79 +126,137 @@ def relative_velocity(state, w, a, b, scratch, px, py, pz):
 
 
 @kernel
-def gather_patch(scratch, seed, count):
-    """Group the approaching contacts whose normals are within PATCH_COS of contact ``seed``'s
-    into one patch (marking them used). Weights are the approach speeds -v_n (kept in
-    scratch.depth). Returns (centroid xyz, unit normal xyz, mean distance of the patch's points
-    from the centroid)."""
+def same_motion(state, w, p, q):
+    """Do bodies p and q move as one rigid body, to within SAME_MOTION (same omega and same
+    V - omega x X)?"""
+    if p == q:
+        return True
+    for c in range(3):
+        if abs(state.angular_velocity[w, p, c] - state.angular_velocity[w, q, c]) > SAME_MOTION:
+            return False
+    wx, wy, wz = state.angular_velocity[w, p, 0], state.angular_velocity[w, p, 1], state.angular_velocity[w, p, 2]
+    px, py, pz = cross(wx, wy, wz, state.position[w, p, 0], state.position[w, p, 1], state.position[w, p, 2])
+    qx, qy, qz = cross(wx, wy, wz, state.position[w, q, 0], state.position[w, q, 1], state.position[w, q, 2])
+    return (abs(state.velocity[w, p, 0] - px - state.velocity[w, q, 0] + qx) <= SAME_MOTION
+            and abs(state.velocity[w, p, 1] - py - state.velocity[w, q, 1] + qy) <= SAME_MOTION
+            and abs(state.velocity[w, p, 2] - pz - state.velocity[w, q, 2] + qz) <= SAME_MOTION)
+
+
+@kernel
+def gather_patch(state, w, scratch, seed, count):
+    """Put every unassigned contact whose normal is within PATCH_COS of contact ``seed``'s,
+    and whose partner body moves rigidly with the seed's, into the patch ``seed``
+    (scratch.group). Returns how many of them approach (v_n < 0, kept in scratch.depth)."""
     seed_n = scratch.normal[seed]
-    total = cx = cy = cz = nx = ny = nz = 0.0
+    approaching = 0
     for i in range(seed, count):
         n = scratch.normal[i]
-        if scratch.used[i] or scratch.depth[i] >= 0.0:
+        if scratch.group[i] >= 0:
+            continue
+        if not same_motion(state, w, scratch.partner[seed], scratch.partner[i]):
             continue
         if n[0] * seed_n[0] + n[1] * seed_n[1] + n[2] * seed_n[2] < PATCH_COS:
             continue
-        weight = -scratch.depth[i]
-        scratch.used[i] = True
-        total += weight
-        cx += weight * scratch.point[i, 0]
-        cy += weight * scratch.point[i, 1]
-        cz += weight * scratch.point[i, 2]
-        nx += weight * n[0]
-        ny += weight * n[1]
-        nz += weight * n[2]
+        scratch.group[i] = seed
+        if scratch.depth[i] < 0.0:
+            approaching += 1
+    return approaching
+
+
+@kernel
+def approach_weighted_centre(scratch, seed, count):
+    """Centroid and mean normal of the patch's approaching contacts, each weighted by its
+    approach speed -v_n, and their mean distance from that centroid (m)."""
+    total = cx = cy = cz = nx = ny = nz = 0.0
+    for i in range(seed, count):
+        if scratch.group[i] == seed and scratch.depth[i] < 0.0:
+            weight = -scratch.depth[i]
+            total += weight
+            cx += weight * scratch.point[i, 0]
+            cy += weight * scratch.point[i, 1]
+            cz += weight * scratch.point[i, 2]
+            nx += weight * scratch.normal[i, 0]
+            ny += weight * scratch.normal[i, 1]
+            nz += weight * scratch.normal[i, 2]
     cx, cy, cz = cx / total, cy / total, cz / total
     norm = math.sqrt(nx * nx + ny * ny + nz * nz)
     radius = 0.0
     for i in range(seed, count):
-        if scratch.used[i] and scratch.depth[i] < 0.0 and scratch.group[i] < 0:
-            scratch.group[i] = seed
+        if scratch.group[i] == seed and scratch.depth[i] < 0.0:
             dx, dy, dz = scratch.point[i, 0] - cx, scratch.point[i, 1] - cy, scratch.point[i, 2] - cz
             radius += -scratch.depth[i] * math.sqrt(dx * dx + dy * dy + dz * dz)
     return cx, cy, cz, nx / norm, ny / norm, nz / norm, radius / total
 
 
 @kernel
+def restitution_for(model, w, a, b, mode, ramp_e):
+    """COLLISION: the pair's max(e_a, e_b); CONTACT: the ramp value; SHOCK: 0."""
+    if mode == COLLISION:
+        return max(model.restitution[w, a], model.restitution[w, b])
+    if mode == CONTACT:
+        return ramp_e
+    return 0.0
+
+
+@kernel
 def resolve_pair(state, model, geo, w, a, b, dt, lookahead, mode, ramp_e, movable_a, movable_b,
                  scratch):
-    """Resolve the approaching contacts of the pair (a, b) at their predicted poses; returns
-    the number of impulses applied.
+    """Resolve the contacts of the pair (a, b) at their predicted poses (``resolve_patches``);
+    returns the number of impulses applied. mode COLLISION uses the pair's restitution,
+    CONTACT uses ``ramp_e``, SHOCK uses 0. movable_a/b: False treats the body as infinite
+    mass (kinematic, static, or frozen)."""
+    count = find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, 0.0, scratch)
+    for i in range(count):
+        scratch.partner[i] = b
+    return resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mode, ramp_e)
 
-    The contacts are grouped into patches of similar normal (a face resting on a face is one
-    patch). Each patch gets one impulse (``impulse.contact_impulse``) at the centroid of its
-    points, weighted by their approach speed, along their mean normal, and a torsional friction
-    impulse about the normal that stops relative spin, bounded by mu j_n r (r: the points' mean
-    distance from the centroid). One impulse per patch, not one per point, is what lets a box
-    on a face come exactly to rest: sequential point impulses leave it rocking, and their
-    order biases it sideways.
-    mode COLLISION uses the pair's restitution, CONTACT uses ``ramp_e``, SHOCK uses 0.
-    movable_a/b: False treats the body as infinite mass (kinematic, static, or frozen).
+
+@kernel
+def resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mode, ramp_e):
+    """Resolve body a's contacts in scratch (normals towards a; each against the body
+    scratch.partner[i]) in phase ``mode``; returns the number of impulses applied.
+
+    The contacts are grouped into patches of similar normal and rigidly co-moving partners (a
+    face resting on a face is one patch). Against an immovable partner (static, kinematic, or
+    frozen by shock propagation) in the contact and shock phases, a face or edge patch gets
+    the wrench of ``patch.resolve_patch`` over all its touching points: it
+    brings the patch exactly to rest or to sliding without rocking, or does nothing when the
+    patch is separating. Otherwise (collisions, two movable bodies, single points, a body
+    tipping over an edge) the patch's approaching points get one impulse (``impulse.contact_impulse``) at their
+    centroid, weighted by approach speed, along their mean normal, plus torsional friction
+    about the normal bounded by mu j_n r (r: the points' mean distance from the centroid).
+    One impulse per patch, not one per point, is what lets a box come exactly to rest:
+    sequential point impulses leave it rocking, and their order biases it sideways.
     """
-    count = find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, scratch)
     if count == 0:
         return 0
-    if mode == COLLISION:
-        e = max(model.restitution[w, a], model.restitution[w, b])
-    elif mode == CONTACT:
-        e = ramp_e
-    else:
-        e = 0.0
-    mu = math.sqrt(model.friction[w, a] * model.friction[w, b])
     # approach speed of every contact, kept in scratch.depth (negative: approaching)
     for i in range(count):
         p = scratch.point[i]
         n = scratch.normal[i]
-        vx, vy, vz = relative_velocity(state, w, a, b, scratch, p[0], p[1], p[2])
+        vx, vy, vz = relative_velocity(state, w, a, scratch.partner[i], scratch, p[0], p[1], p[2])
         scratch.depth[i] = vx * n[0] + vy * n[1] + vz * n[2]
-        scratch.used[i] = False
         scratch.group[i] = -1
     applied = 0
     k = scratch.k
     for seed in range(count):
-        if scratch.used[seed] or scratch.depth[seed] >= 0.0:
+        if scratch.group[seed] >= 0:
             continue
-        cx, cy, cz, nx, ny, nz, radius = gather_patch(scratch, seed, count)
+        b = scratch.partner[seed]
+        e = restitution_for(model, w, a, b, mode, ramp_e)
+        mu = math.sqrt(model.friction[w, a] * model.friction[w, b])
+        approaching = gather_patch(state, w, scratch, seed, count)
+        if mode != COLLISION and not movable_b:
+            outcome = resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed,
+                                    count, e, mu)
+            if outcome == APPLIED:
+                applied += 1
+                continue
+            if outcome == SEPARATING:
+                continue
+        if approaching == 0:
+            continue
+        cx, cy, cz, nx, ny, nz, radius = approach_weighted_centre(scratch, seed, count)
         vx, vy, vz = relative_velocity(state, w, a, b, scratch, cx, cy, cz)
         if vx * nx + vy * ny + vz * nz >= 0.0:
             continue
@@ -211,39 +282,47 @@ def resolve_pair(state, model, geo, w, a, b, dt, lookahead, mode, ramp_e, movabl
                                -jx, -jy, -jz, rbx, rby, rbz)
         if mu > 0.0 and radius > 0.0:
             limit = mu * (jx * nx + jy * ny + jz * nz) * radius
-            apply_torsional_friction(state, model, w, a, b, movable_a, movable_b, nx, ny, nz, limit)
+            spin_friction(state, model, w, a, b, movable_a, movable_b, nx, ny, nz, limit)
         applied += 1
     return applied
 
 
 @kernel
-def apply_torsional_friction(state, model, w, a, b, movable_a, movable_b, nx, ny, nz, limit):
-    """Angular impulse t n (on a; -t n on b) that stops the bodies' relative spin about n,
-    |t| <= limit (N m s)."""
-    spin = ((state.angular_velocity[w, a, 0] - state.angular_velocity[w, b, 0]) * nx
-            + (state.angular_velocity[w, a, 1] - state.angular_velocity[w, b, 1]) * ny
-            + (state.angular_velocity[w, a, 2] - state.angular_velocity[w, b, 2]) * nz)
-    compliance = 0.0
-    if movable_a:
-        ix, iy, iz = apply_inverse_inertia(state.rotation[w, a], model.inverse_moments[w, a], nx, ny, nz)
-        compliance += ix * nx + iy * ny + iz * nz
-    if movable_b:
-        ix, iy, iz = apply_inverse_inertia(state.rotation[w, b], model.inverse_moments[w, b], nx, ny, nz)
-        compliance += ix * nx + iy * ny + iz * nz
-    if compliance <= 0.0:
-        return
-    t = min(max(-spin / compliance, -limit), limit)
-    for i, sign, movable in ((a, 1.0, movable_a), (b, -1.0, movable_b)):
-        if movable:
+def resolve_supported_body(state, model, geo, w, body, level, current, touching, pair_a, pair_b,
+                           body_pair_start, body_pairs, dt, lookahead, scratch, wide):
+    """Shock propagation for one body of the level being processed against all its frozen
+    supports at once: their contacts (deepest first per pair, normals turned towards ``body``)
+    go into ``wide`` and are resolved as patches, so a box straddling two frozen boxes is held
+    by both (one support alone could hold it only with its centre of pressure on an edge)."""
+    count = 0
+    capacity = wide.depth.shape[0]
+    applied = 0
+    for s in range(body_pair_start[body], body_pair_start[body + 1]):
+        k = body_pairs[s]
+        if not touching[k]:
+            continue
+        a, b = pair_a[w, k], pair_b[w, k]
+        other = b if a == body else a
+        if model.motion[other] == DYNAMIC and level[other] >= current:
+            continue  # not frozen: resolved pair by pair
+        found = find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, GRAPH_MARGIN,
+                                   scratch)
+        if count + found > capacity:
+            # no room to combine it: resolve this support on its own rather than drop it
+            applied += resolve_pair(state, model, geo, w, a, b, dt, lookahead, SHOCK, 0.0,
+                                    a == body, b == body, scratch)
+            continue
+        sign = 1.0 if a == body else -1.0
+        for i in range(found):
             for c in range(3):
-                state.angular_momentum[w, i, c] += sign * t * (nx, ny, nz)[c]
-            ox, oy, oz = apply_inverse_inertia(state.rotation[w, i], model.inverse_moments[w, i],
-                                               state.angular_momentum[w, i, 0],
-                                               state.angular_momentum[w, i, 1],
-                                               state.angular_momentum[w, i, 2])
-            state.angular_velocity[w, i, 0] = ox
-            state.angular_velocity[w, i, 1] = oy
-            state.angular_velocity[w, i, 2] = oz
+                wide.point[count, c] = scratch.point[i, c]
+                wide.normal[count, c] = sign * scratch.normal[i, c]
+            wide.partner[count] = other
+            count += 1
+        for c in range(3):
+            wide.position[other, c] = scratch.position[other, c]
+            wide.position[body, c] = scratch.position[body, c]
+    return applied + resolve_patches(state, model, w, body, True, False, wide, count, SHOCK, 0.0)
 
 
 @kernel(parallel=True)
@@ -356,15 +435,40 @@ def contact_levels(n, motion, edge_from, edge_to, num_edges, level):
         level[v] = component_level[component[v]] if motion[v] == DYNAMIC else 0
 
 
+@kernel
+def pairs_by_body(n, pair_a, pair_b, pairs, touching):
+    """CSR adjacency of the touching pairs: body v's pairs are
+    body_pairs[body_pair_start[v]:body_pair_start[v + 1]]."""
+    start = np.zeros(n + 1, dtype=np.int64)
+    for k in range(pairs):
+        if touching[k]:
+            start[pair_a[k] + 1] += 1
+            start[pair_b[k] + 1] += 1
+    for v in range(n):
+        start[v + 1] += start[v]
+    fill = start[:-1].copy()
+    body_pairs = np.empty(start[n], dtype=np.int64)
+    for k in range(pairs):
+        if touching[k]:
+            body_pairs[fill[pair_a[k]]] = k
+            fill[pair_a[k]] += 1
+            body_pairs[fill[pair_b[k]]] = k
+            fill[pair_b[k]] += 1
+    return start, body_pairs
+
+
 @kernel(parallel=True)
-def propagate_shock(state, model, geo, pair_a, pair_b, pair_count, dt, up, sweeps, capacity):
+def propagate_shock(state, model, geo, pair_a, pair_b, pair_count, dt, up, sweeps, capacity,
+                    wide_capacity):
     """The shock-propagation phase for every world (see the module docstring).
 
-    up: (3,) unit vector against gravity; sweeps: passes over each level's pairs."""
+    up: (3,) unit vector against gravity; sweeps: passes over each level; capacity: the most
+    contacts of one pair; wide_capacity: room for one body's contacts with all its supports."""
     num_worlds, n = state.position.shape[0], state.position.shape[1]
     lookahead = np.zeros(3)
     for w in prange(num_worlds):
         scratch = make_scratch(n, capacity)
+        wide = make_scratch(n, wide_capacity)
         pairs = pair_count[w]
         touching = np.zeros(pairs, dtype=np.bool_)
         edge_from = np.empty(2 * pairs, dtype=np.int64)
@@ -372,7 +476,8 @@ def propagate_shock(state, model, geo, pair_a, pair_b, pair_count, dt, up, sweep
         edges = 0
         for k in range(pairs):
             a, b = pair_a[w, k], pair_b[w, k]
-            if find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, scratch) == 0:
+            if find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, GRAPH_MARGIN,
+                                  scratch) == 0:
                 continue
             touching[k] = True
             if model.motion[b] != DYNAMIC:
@@ -387,22 +492,25 @@ def propagate_shock(state, model, geo, pair_a, pair_b, pair_count, dt, up, sweep
                 edges += 1
         level = np.empty(n, dtype=np.int64)
         contact_levels(n, model.motion, edge_from, edge_to, edges, level)
-        pair_level = np.full(pairs, NOT_TOUCHING, dtype=np.int64)
-        for k in range(pairs):
-            if touching[k]:
-                pair_level[k] = max(level[pair_a[w, k]], level[pair_b[w, k]])
-        order = np.argsort(pair_level, kind="mergesort")
+        body_pair_start, body_pairs = pairs_by_body(n, pair_a[w], pair_b[w], pairs, touching)
+        by_level = np.argsort(level, kind="mergesort")
         start = 0
-        while start < pairs and touching[order[start]]:
-            current = pair_level[order[start]]
+        while start < n:
+            current = level[by_level[start]]
             end = start
-            while end < pairs and touching[order[end]] and pair_level[order[end]] == current:
+            while end < n and level[by_level[end]] == current:
                 end += 1
-            for _ in range(sweeps):
-                for s in range(start, end):
-                    k = order[s]
-                    a, b = pair_a[w, k], pair_b[w, k]
-                    resolve_pair(state, model, geo, w, a, b, dt, lookahead, SHOCK, 0.0,
-                                 model.motion[a] == DYNAMIC and level[a] == current,
-                                 model.motion[b] == DYNAMIC and level[b] == current, scratch)
+            if current > 0:
+                for _ in range(sweeps):
+                    # each body of the level against all its frozen supports at once
+                    for s in range(start, end):
+                        resolve_supported_body(state, model, geo, w, by_level[s], level, current,
+                                               touching, pair_a, pair_b, body_pair_start,
+                                               body_pairs, dt, lookahead, scratch, wide)
+                    # then the pairs inside the level, both bodies movable
+                    for k in range(pairs):
+                        a, b = pair_a[w, k], pair_b[w, k]
+                        if touching[k] and level[a] == current and level[b] == current:
+                            resolve_pair(state, model, geo, w, a, b, dt, lookahead, SHOCK, 0.0,
+                                         True, True, scratch)
             start = end
