@@ -14,6 +14,7 @@ import numpy as np
 from rigid_gym.geometry import Geometry
 from rigid_gym.kernels.broadphase import find_pairs
 from rigid_gym.kernels.contacts import detect_contacts
+from rigid_gym.kernels.jit import for_worlds
 
 SWEEP_MIN_BODIES = 32
 """Bounded bodies from which sort-and-sweep beats brute force (benchmarks/collision.py)."""
@@ -72,10 +73,11 @@ class Collider:
         """Fill pair_a/pair_b/pair_count with the pairs that may touch within dt (s) of the
         state's poses (a ``world.State``), boxes grown by margin (m) and by how far the bodies
         can move in dt under an acceleration bound (m/s^2)."""
+        pairs = for_worlds(find_pairs, len(self.pair_count))
         while True:
-            find_pairs(state.position, state.rotation, state.velocity, state.angular_velocity,
-                       self.motion, self.geometry, margin, dt, acceleration, self.sweep,
-                       self.bounds, self.pair_a, self.pair_b, self.pair_count)
+            pairs(state.position, state.rotation, state.velocity, state.angular_velocity,
+                  self.motion, self.geometry, margin, dt, acceleration, self.sweep, self.bounds,
+                  self.pair_a, self.pair_b, self.pair_count)
             needed = int(self.pair_count.max(initial=0))
             if needed <= self.pair_a.shape[1]:
                 return
@@ -85,10 +87,11 @@ class Collider:
         """Fill the contact buffers for the state's current poses (contacts deeper than -margin,
         m)."""
         self.find_pairs(state, margin)
+        detect = for_worlds(detect_contacts, len(self.pair_count))
         while True:
-            detect_contacts(state.position, state.rotation, self.geometry, self.pair_a, self.pair_b,
-                            self.pair_count, margin, self.body_a, self.body_b, self.point,
-                            self.normal, self.depth, self.contact_count)
+            detect(state.position, state.rotation, self.geometry, self.pair_a, self.pair_b,
+                   self.pair_count, margin, self.body_a, self.body_b, self.point, self.normal,
+                   self.depth, self.contact_count)
             needed = int(self.contact_count.max(initial=0))
             if needed <= self.depth.shape[1]:
                 return

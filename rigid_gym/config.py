@@ -81,14 +81,15 @@ class SolverConfig:
             derived["shock_sweeps"] = 0
         return cls(**{**derived, **overrides})
 
-    def phases(self) -> dict[str, bool]:
-        """Which phases of the step run, by name, in step order."""
+    def phases(self, gravity: bool = True) -> dict[str, bool]:
+        """Which phases of the step run, by name, in step order. Shock propagation orders
+        bodies along gravity, so without gravity (``gravity=False``) it never runs."""
         return {
             "broad_phase": self.collision_passes > 0 or self.contact_passes > 0
             or self.shock_sweeps > 0,
             "collision": self.collision_passes > 0,
             "update_velocities": True,
             "contact": self.contact_passes > 0,
-            "shock_propagation": self.shock_sweeps > 0,
+            "shock_propagation": self.shock_sweeps > 0 and gravity,
             "update_positions": True,
         }

@@ -22,6 +22,7 @@ relies on.
 
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import numpy as np
@@ -99,8 +100,10 @@ def primitives(shape, pose: Pose) -> list[tuple[object, Pose]]:
     return [(shape, pose)]
 
 
+@functools.lru_cache(maxsize=64)
 def mesh_grid(mesh: Mesh) -> _Grid:
-    """Sample a mesh's exact signed distance on a padded grid of cubic cells."""
+    """Sample a mesh's exact signed distance on a padded grid of cubic cells. Meshes are
+    immutable, so the grid is computed once per mesh and reused by every World built with it."""
     lower, upper = mesh.bounds()
     spacing = float(np.max(upper - lower)) / mesh.sdf_resolution
     origin = lower - GRID_PADDING_CELLS * spacing
@@ -109,6 +112,8 @@ def mesh_grid(mesh: Mesh) -> _Grid:
     nodes = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     values = np.empty(len(nodes))
     mesh_kernels.signed_distance(np.ascontiguousarray(nodes), mesh.vertices, mesh.triangles, values)
+    for shared in (shape, origin, values):
+        shared.setflags(write=False)
     return _Grid(shape, origin, spacing, values)
 
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from rigid_gym.config import SolverConfig
 from rigid_gym.kernels import integrate, solver
+from rigid_gym.kernels.jit import for_worlds
 
 SUPPORT_CONTACTS = 4
 """Room for one body's contacts with its frozen supports in shock propagation, in pair
@@ -37,8 +38,13 @@ class Profile:
 def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
     """Advance every world of ``world`` (a :class:`rigid_gym.World`) by ``dt`` seconds."""
     s, m, geo, pairs = world.state, world.model, world.geometry, world.collider
-    on = config.phases()
+    # light kernels run serially for a single world (waking the thread pool costs more than
+    # their work); the solver phases stay parallel: their serial twins measured 3.5x slower
+    # (29 vs 101 ms per step on a 40-body pile), a numba code-generation difference not yet
+    # understood (see docs/architecture.md)
+    k = lambda compiled: for_worlds(compiled, world.num_worlds)  # noqa: E731
     gravity = float(np.linalg.norm(m.gravity))
+    on = config.phases(gravity > 0.0)
     capacity = world.pair_contact_capacity
     # 0. broad phase: every pair whose boxes may meet within this step (velocities included)
     if on["broad_phase"]:
@@ -48,7 +54,7 @@ def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
         profile.run("collision", solver.resolve_contacts, s, m, geo, pairs.pair_a, pairs.pair_b,
                     pairs.pair_count, dt, solver.COLLISION, config.collision_passes, capacity)
     # 2. velocity update: V += dt (g + F/M), L += dt tau
-    profile.run("update_velocities", integrate.update_velocities,
+    profile.run("update_velocities", k(integrate.update_velocities),
                 s.velocity, s.angular_momentum, s.angular_velocity, s.rotation, s.force, s.torque,
                 m.inverse_mass, m.inverse_moments, m.motion, m.gravity, dt)
     # 3. contact: predicted with the new velocities, restitution ramping from -0.9 to 0
@@ -62,6 +68,6 @@ def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
                     pairs.pair_b, pairs.pair_count, dt, up, config.shock_sweeps, capacity,
                     SUPPORT_CONTACTS * capacity)
     # 5. position update with the final velocities: X += dt V, q by the exact rotation
-    profile.run("update_positions", integrate.update_positions,
+    profile.run("update_positions", k(integrate.update_positions),
                 s.position, s.orientation, s.velocity, s.angular_momentum, s.angular_velocity,
                 s.rotation, s.torque, m.inverse_moments, m.motion, dt, config.rotation_order)

@@ -23,6 +23,7 @@ from rigid_gym import quaternion as quat
 from rigid_gym.config import SolverConfig
 from rigid_gym.kernels import integrate
 from rigid_gym.kernels.integrate import DYNAMIC, STATIC
+from rigid_gym.kernels.jit import for_worlds
 from rigid_gym.scene import Scene
 
 
@@ -219,7 +220,7 @@ class World:
         return {
             name: {"on": on, "seconds": self._profile.seconds.get(name, 0.0),
                    "calls": self._profile.calls.get(name, 0)}
-            for name, on in self.config.phases().items()
+            for name, on in self.config.phases(bool(np.any(self.model.gravity))).items()
         }
 
     def body_index(self, name: str) -> int:
@@ -303,7 +304,7 @@ class World:
 
     def _refresh_derived(self) -> None:
         s, m = self.state, self.model
-        integrate.refresh_rotation_and_angular_velocity(
+        for_worlds(integrate.refresh_rotation_and_angular_velocity, self.num_worlds)(
             s.orientation, s.angular_momentum, m.inverse_moments, m.motion, s.rotation,
             s.angular_velocity)
 

@@ -4,7 +4,13 @@
 ``fastmath=False`` so results are IEEE-exact and runs are bit-for-bit repeatable;
 ``error_model="numpy"`` so a division by zero gives inf/nan (caught by validation upstream)
 rather than a Python exception inside a parallel loop.
+
+A kernel compiled with ``parallel=True`` (a ``prange`` over worlds) also carries a serial twin,
+``kernel.serial``: with a single world, waking numba's thread pool costs more than the work
+(about 8 ms per call when another process keeps the cores busy), so single worlds use it.
 """
+
+import types
 
 import numba
 
@@ -12,12 +18,27 @@ JIT_FLAGS = dict(cache=True, fastmath=False, nogil=True, error_model="numpy")
 
 
 def kernel(fn=None, *, parallel: bool = False):
-    """Compile ``fn`` with the project's flags; ``parallel=True`` enables ``numba.prange``."""
+    """Compile ``fn`` with the project's flags; ``parallel=True`` enables ``numba.prange`` and
+    adds the serial twin ``.serial``."""
 
     def wrap(f):
-        return numba.njit(parallel=parallel, **JIT_FLAGS)(f)
+        if not parallel:
+            return numba.njit(**JIT_FLAGS)(f)
+        compiled = numba.njit(parallel=True, **JIT_FLAGS)(f)
+        # a distinct name keeps the twin's on-disk cache apart from the parallel one
+        twin = types.FunctionType(f.__code__, f.__globals__, f.__name__ + "_serial",
+                                  f.__defaults__, f.__closure__)
+        twin.__qualname__ = f.__qualname__ + "_serial"
+        twin.__doc__ = f.__doc__
+        compiled.serial = numba.njit(**JIT_FLAGS)(twin)
+        return compiled
 
     return wrap(fn) if fn is not None else wrap
+
+
+def for_worlds(compiled, num_worlds: int):
+    """The variant of a parallel kernel to call for ``num_worlds`` worlds."""
+    return compiled.serial if num_worlds == 1 else compiled
 
 
 prange = numba.prange
