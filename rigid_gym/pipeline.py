@@ -46,9 +46,12 @@ def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
     gravity = float(np.linalg.norm(m.gravity))
     on = config.phases(gravity > 0.0)
     capacity = world.pair_contact_capacity
-    # 0. broad phase: every pair whose boxes may meet within this step (velocities included)
+    # 0. broad phase: every pair whose boxes may meet within this step (velocities included);
+    #    when no world has one, the impulse phases have nothing to do
     if on["broad_phase"]:
         profile.run("broad_phase", pairs.find_pairs, s, 0.0, dt, gravity)
+        if not pairs.pair_count.any():
+            on = {**on, "collision": False, "contact": False, "shock_propagation": False}
     # 1. collision: at poses predicted with the old velocities, real restitution
     if on["collision"]:
         profile.run("collision", solver.resolve_contacts, s, m, geo, pairs.pair_a, pairs.pair_b,
