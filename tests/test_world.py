@@ -137,15 +137,26 @@ def test_mesh_body_is_stored_at_its_centre_of_mass_in_its_principal_frame():
 
 
 def test_profile_reports_phases():
-    world = rg.World(mixed_scene())
+    """A box resting on the ground runs every phase its config switches on (for_scene leaves the
+    collision phase out: every restitution is 0); bodies in free flight, with no pair that
+    could touch, skip the impulse phases."""
+    scene = rg.Scene()
+    scene.add_ground()
+    scene.add_body(rg.Box((0.05, 0.05, 0.05)), mass=1.0, position=(0, 0, 0.05))
+    world = rg.World(scene)
     world.step(5)
     profile = world.profile()
     assert list(profile) == ["broad_phase", "collision", "update_velocities", "contact",
                              "shock_propagation", "update_positions"]
-    # every restitution is 0, so for_scene leaves the collision phase out
     assert not profile["collision"]["on"] and profile["collision"]["calls"] == 0
     ran = [p for name, p in profile.items() if name != "collision"]
     assert all(p["on"] and p["calls"] == 5 and p["seconds"] > 0 for p in ran)
+
+    flying = rg.World(mixed_scene())
+    flying.step(5)
+    calls = {name: p["calls"] for name, p in flying.profile().items()}
+    assert calls["broad_phase"] == 5 and calls["update_positions"] == 5
+    assert calls["contact"] == 0 and calls["shock_propagation"] == 0
 
 
 def test_state_views_are_read_only():
