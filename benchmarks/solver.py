@@ -83,7 +83,7 @@ def main() -> None:
     scenes = [("10-cube stack", stack(), 240, 240), ("pile of 10", pile(10), 240, 240)]
     if not args.quick:
         scenes += [("55-box pyramid", pyramid(), 240, 120), ("pile of 100", pile(100), 240, 48),
-                   ("pile of 1000", pile(1000), 24, 4)]
+                   ("pile of 1000", pile(1000), 120, 4)]
     variants = [("default", {}), ("no contact phase", {"contact_passes": 0}),
                 ("no shock propagation", {"shock_sweeps": 0}),
                 ("neither", {"contact_passes": 0, "shock_sweeps": 0})]
