@@ -10,7 +10,7 @@ contacts (v_n < 0) get an impulse j, +j on body 1 and -j on body 2:
                       j_n = -(1 + e) v_n / (n^T K (n - mu T))                  (slides 22-23)
 with K = K_1 + K_2. A non-positive sliding denominator (possible for large mu, a Painleve-type
 case) falls back to the static impulse, which always removes the approach.
-Applying j: V += j / M, L += r x j, omega = I(t)^-1 L (slide 18).
+Applying j (``patch.apply_pair``): V += j / M, L += r x j, omega = I(t)^-1 L (slide 18).
 """
 
 import math
@@ -87,26 +87,3 @@ def contact_impulse(k, vx, vy, vz, nx, ny, nz, e, mu):
         return jx, jy, jz
     jn = -(1.0 + e) * vn / denom
     return jn * dx, jn * dy, jn * dz
-
-
-@kernel
-def point_velocity(velocity, angular_velocity, rx, ry, rz):
-    """V + omega x r of one body (velocity (3,), angular_velocity (3,)); a 3-tuple."""
-    wx, wy, wz = cross(angular_velocity[0], angular_velocity[1], angular_velocity[2], rx, ry, rz)
-    return velocity[0] + wx, velocity[1] + wy, velocity[2] + wz
-
-
-@kernel
-def apply_body_impulse(velocity, angular_momentum, angular_velocity, rotation, inverse_mass,
-                       inverse_moments, jx, jy, jz, rx, ry, rz):
-    """V += j / M, L += r x j, omega = I(t)^-1 L for one body (its (3,) rows)."""
-    velocity[0] += jx * inverse_mass
-    velocity[1] += jy * inverse_mass
-    velocity[2] += jz * inverse_mass
-    lx, ly, lz = cross(rx, ry, rz, jx, jy, jz)
-    angular_momentum[0] += lx
-    angular_momentum[1] += ly
-    angular_momentum[2] += lz
-    ox, oy, oz = apply_inverse_inertia(rotation, inverse_moments, angular_momentum[0],
-                                       angular_momentum[1], angular_momentum[2])
-    angular_velocity[0], angular_velocity[1], angular_velocity[2] = ox, oy, oz

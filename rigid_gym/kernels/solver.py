@@ -28,16 +28,18 @@ import math
 
 import numpy as np
 
-from rigid_gym.kernels.impulse import (
-    add_point_mass_matrix,
-    apply_body_impulse,
-    contact_impulse,
-    point_velocity,
-)
+from rigid_gym.kernels.impulse import add_point_mass_matrix, contact_impulse
 from rigid_gym.kernels.integrate import DYNAMIC, STATIC
 from rigid_gym.kernels.jit import kernel, prange
 from rigid_gym.kernels.narrowphase import collide_bodies
-from rigid_gym.kernels.patch import APPLIED, SEPARATING, resolve_patch, spin_friction
+from rigid_gym.kernels.patch import (
+    APPLIED,
+    SEPARATING,
+    apply_pair,
+    relative_point_velocity,
+    resolve_patch,
+    spin_friction,
+)
 from rigid_gym.kernels.quaternion import (
     cross,
     rotate_by_angular_velocity,
@@ -118,11 +120,10 @@ def find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, margin, scratc
 @kernel
 def relative_velocity(state, w, a, b, scratch, px, py, pz):
     """v_a - v_b at world point p, each body's lever arm taken from its predicted centre."""
-    rax, ray, raz = px - scratch.position[a, 0], py - scratch.position[a, 1], pz - scratch.position[a, 2]
-    rbx, rby, rbz = px - scratch.position[b, 0], py - scratch.position[b, 1], pz - scratch.position[b, 2]
-    vax, vay, vaz = point_velocity(state.velocity[w, a], state.angular_velocity[w, a], rax, ray, raz)
-    vbx, vby, vbz = point_velocity(state.velocity[w, b], state.angular_velocity[w, b], rbx, rby, rbz)
-    return vax - vbx, vay - vby, vaz - vbz
+    return relative_point_velocity(
+        state, w, a, b, px - scratch.position[a, 0], py - scratch.position[a, 1],
+        pz - scratch.position[a, 2], px - scratch.position[b, 0], py - scratch.position[b, 1],
+        pz - scratch.position[b, 2])
 
 
 @kernel
@@ -270,16 +271,8 @@ def resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mo
             add_point_mass_matrix(model.inverse_mass[w, b], state.rotation[w, b],
                                   model.inverse_moments[w, b], rbx, rby, rbz, k)
         jx, jy, jz = contact_impulse(k, vx, vy, vz, nx, ny, nz, e, mu)
-        if movable_a:
-            apply_body_impulse(state.velocity[w, a], state.angular_momentum[w, a],
-                               state.angular_velocity[w, a], state.rotation[w, a],
-                               model.inverse_mass[w, a], model.inverse_moments[w, a],
-                               jx, jy, jz, rax, ray, raz)
-        if movable_b:
-            apply_body_impulse(state.velocity[w, b], state.angular_momentum[w, b],
-                               state.angular_velocity[w, b], state.rotation[w, b],
-                               model.inverse_mass[w, b], model.inverse_moments[w, b],
-                               -jx, -jy, -jz, rbx, rby, rbz)
+        apply_pair(state, model, w, a, b, movable_a, movable_b, jx, jy, jz, 0.0, 0.0, 0.0,
+                   rax, ray, raz, rbx, rby, rbz)
         if mu > 0.0 and radius > 0.0:
             limit = mu * (jx * nx + jy * ny + jz * nz) * radius
             spin_friction(state, model, w, a, b, movable_a, movable_b, nx, ny, nz, limit)
