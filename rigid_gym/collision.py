@@ -60,6 +60,7 @@ class Collider:
         b = len(self.pair_count)
         self.pair_a = np.zeros((b, capacity), dtype=np.int32)
         self.pair_b = np.zeros((b, capacity), dtype=np.int32)
+        self.pair_impulse = np.zeros((b, capacity, 3))  # the solver's per-step totals, N s
 
     def _allocate_contacts(self, capacity: int) -> None:
         b = len(self.contact_count)

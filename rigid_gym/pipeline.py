@@ -50,12 +50,13 @@ def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
     #    when no world has one, the impulse phases have nothing to do
     if on["broad_phase"]:
         profile.run("broad_phase", pairs.find_pairs, s, 0.0, dt, gravity)
+        pairs.pair_impulse.fill(0.0)  # Coulomb's limit applies to each pair's step total
         if not pairs.pair_count.any():
             on = {**on, "collision": False, "contact": False, "shock_propagation": False}
     # 1. collision: at poses predicted with the old velocities, real restitution
     if on["collision"]:
         profile.run("collision", solver.resolve_contacts, s, m, geo, pairs.pair_a, pairs.pair_b,
-                    pairs.pair_count, dt, solver.COLLISION, config.collision_passes, capacity)
+                    pairs.pair_count, pairs.pair_impulse, dt, solver.COLLISION, config.collision_passes, capacity)
     # 2. velocity update: V += dt (g + F/M), L += dt tau
     profile.run("update_velocities", k(integrate.update_velocities),
                 s.velocity, s.angular_momentum, s.angular_velocity, s.rotation, s.force, s.torque,
@@ -63,12 +64,13 @@ def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
     # 3. contact: predicted with the new velocities, restitution ramping from -0.9 to 0
     if on["contact"]:
         profile.run("contact", solver.resolve_contacts, s, m, geo, pairs.pair_a, pairs.pair_b,
-                    pairs.pair_count, dt, solver.CONTACT, config.contact_passes, capacity)
+                    pairs.pair_count, pairs.pair_impulse, dt, solver.CONTACT, config.contact_passes, capacity)
     # 4. shock propagation: level by level from the ground up, lower levels frozen
     if on["shock_propagation"]:
         up = -m.gravity / gravity
         profile.run("shock_propagation", solver.propagate_shock, s, m, geo, pairs.pair_a,
-                    pairs.pair_b, pairs.pair_count, dt, up, config.shock_sweeps, capacity,
+                    pairs.pair_b, pairs.pair_count, pairs.pair_impulse, dt, up,
+                    config.shock_sweeps, capacity,
                     SUPPORT_CONTACTS * capacity)
     # 5. position update with the final velocities: X += dt V, q by the exact rotation
     profile.run("update_positions", k(integrate.update_positions),

@@ -14,9 +14,11 @@ gets the wrench (j, m) at its centroid c that does it in one go:
     matrix     [dv; dOmega] = A [j; m],  A = sum over movable bodies of
                [[1/M + r*^T W r*, r*^T W], [W r*, W]],  W = I(t)^-1, r = c - X
 
-It is accepted only if physically admissible: j.n > 0; |j_t| <= mu j_n (Coulomb cone);
-|m.n| <= mu j_n rho (torsional friction; rho: the points' mean distance from c); and the
-centre of pressure c + n x m_t / j_n lies within the patch. If friction cannot hold, the
+It is accepted only if physically admissible: j.n > 0; and, for the patch's total over the
+step so far (the impulse F its pairs already transmitted plus j, the earlier part taken as
+acting at c): |F_t| <= mu F_n (Coulomb cone), |m.n| <= mu F_n rho (torsional friction; rho:
+the points' mean distance from c), and the centre of pressure c + n x m_t / F_n lies within
+the patch. If friction cannot hold, the
 sliding wrench is tried: j = j_n (n - mu T) (slides 22-23) with only the tip constraints, and
 torsional friction applied afterwards within its limit. If the centre of pressure would leave
 the patch the body is tipping over an edge, and the caller falls back to a single impulse.
@@ -189,12 +191,15 @@ def apply_wrench(state, model, w, i, sign, jx, jy, jz, mx, my, mz, rx, ry, rz):
 
 
 @kernel
-def resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed, count, e, mu):
+def resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed, count, e, mu,
+                  prior_x, prior_y, prior_z):
     """Apply the patch wrench of the module docstring to the pair (a, b) for the patch whose
-    contacts have ``scratch.group == seed``. Returns APPLIED; SEPARATING when holding the patch
-    would need a pulling impulse (j_n <= 0: nothing to do); or UNRESOLVED (nothing applied)
-    for a single point or a body tipping over an edge, which the caller treats with a single
-    impulse."""
+    contacts have ``scratch.group == seed``. prior: the impulse the patch's pairs already
+    transmitted to a this step (N s); the static wrench must keep prior + j inside the friction
+    cone. Returns (outcome, linear impulse applied to a): APPLIED; SEPARATING when holding the
+    patch would need a pulling impulse (j_n <= 0: nothing to do); or UNRESOLVED (nothing
+    applied) for a single point or a body tipping over an edge, which the caller treats with a
+    single impulse."""
     # geometric centroid and mean normal of the patch
     cx = cy = cz = nx = ny = nz = 0.0
     m = 0
@@ -208,7 +213,7 @@ def resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed, co
             nz += scratch.normal[i, 2]
             m += 1
     if m < 2:
-        return UNRESOLVED
+        return UNRESOLVED, 0.0, 0.0, 0.0
     cx, cy, cz = cx / m, cy / m, cz / m
     norm = math.sqrt(nx * nx + ny * ny + nz * nz)
     nx, ny, nz = nx / norm, ny / norm, nz / norm
@@ -216,7 +221,7 @@ def resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed, co
     kind, ex, ey, ez, rho = patch_shape(scratch, seed, count, cx, cy, cz, t1x, t1y, t1z,
                                         t2x, t2y, t2z)
     if kind == POINT:
-        return UNRESOLVED
+        return UNRESOLVED, 0.0, 0.0, 0.0
     # constrained rotations: tip axes first, spin about n last
     d = scratch.directions
     if kind == FACE:
@@ -256,17 +261,20 @@ def resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed, co
         if solve_dense(scratch.system, rhs, size, sol):
             jx, jy, jz = sol[0], sol[1], sol[2]
             jn = jx * nx + jy * ny + jz * nz
-            tx, ty, tz = jx - jn * nx, jy - jn * ny, jz - jn * nz
             mx, my, mz = moment(d, sol, tips + 1)
             mn = mx * nx + my * ny + mz * nz
             if jn <= 0.0:
-                return SEPARATING
-            if (math.sqrt(tx * tx + ty * ty + tz * tz) <= mu * jn and abs(mn) <= mu * jn * rho
+                return SEPARATING, 0.0, 0.0, 0.0
+            # Coulomb on the step's total through this patch
+            fx, fy, fz = prior_x + jx, prior_y + jy, prior_z + jz
+            fn = fx * nx + fy * ny + fz * nz
+            tx, ty, tz = fx - fn * nx, fy - fn * ny, fz - fn * nz
+            if (math.sqrt(tx * tx + ty * ty + tz * tz) <= mu * fn and abs(mn) <= mu * fn * rho
                     and pressure_inside(scratch, seed, count, cx, cy, cz, nx, ny, nz,
-                                        mx - mn * nx, my - mn * ny, mz - mn * nz, jn)):
+                                        mx - mn * nx, my - mn * ny, mz - mn * nz, fn)):
                 apply_pair(state, model, w, a, b, movable_a, movable_b, jx, jy, jz, mx, my, mz,
                            rax, ray, raz, rbx, rby, rbz)
-                return APPLIED
+                return APPLIED, jx, jy, jz
     # sliding (or frictionless): j = j_n s, s = n - mu T, with the tip constraints only
     ux, uy, uz = vx - vn * nx, vy - vn * ny, vz - vn * nz
     ut = math.sqrt(ux * ux + uy * uy + uz * uz)
@@ -280,7 +288,7 @@ def resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed, co
     for k in range(tips):
         rhs[1 + k] = -(1.0 + e) * (wx * d[k, 0] + wy * d[k, 1] + wz * d[k, 2])
     if not solve_dense(scratch.system, rhs, 1 + tips, sol):
-        return UNRESOLVED
+        return UNRESOLVED, 0.0, 0.0, 0.0
     jn = sol[0]
     mx = my = mz = 0.0
     for k in range(tips):
@@ -288,14 +296,15 @@ def resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed, co
         my += sol[1 + k] * d[k, 1]
         mz += sol[1 + k] * d[k, 2]
     if jn <= 0.0:
-        return SEPARATING
-    if not pressure_inside(scratch, seed, count, cx, cy, cz, nx, ny, nz, mx, my, mz, jn):
-        return UNRESOLVED
+        return SEPARATING, 0.0, 0.0, 0.0
+    fn = jn + prior_x * nx + prior_y * ny + prior_z * nz
+    if not pressure_inside(scratch, seed, count, cx, cy, cz, nx, ny, nz, mx, my, mz, fn):
+        return UNRESOLVED, 0.0, 0.0, 0.0
     apply_pair(state, model, w, a, b, movable_a, movable_b, jn * sx, jn * sy, jn * sz, mx, my, mz,
                rax, ray, raz, rbx, rby, rbz)
     if mu > 0.0:
         spin_friction(state, model, w, a, b, movable_a, movable_b, nx, ny, nz, mu * jn * rho)
-    return APPLIED
+    return APPLIED, jn * sx, jn * sy, jn * sz
 
 
 @kernel

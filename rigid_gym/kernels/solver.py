@@ -66,8 +66,8 @@ contacts can share a patch (the seed partner's velocity field is used for all of
 PATCH_COS = 0.95
 """Contacts of a pair whose normals agree within this cosine form one patch (one impulse)."""
 
-Scratch = namedtuple("Scratch", "position quaternion rotation point normal depth group partner k "
-                                "box directions wrench system rhs solution work")
+Scratch = namedtuple("Scratch", "position quaternion rotation point normal depth group partner "
+                                "source orient k box directions wrench system rhs solution work")
 
 
 @kernel
@@ -78,7 +78,8 @@ def make_scratch(num_bodies, capacity):
     return Scratch(np.empty((num_bodies, 3)), np.empty((num_bodies, 4)),
                    np.empty((num_bodies, 3, 3)), np.empty((capacity, 3)),
                    np.empty((capacity, 3)), np.empty(capacity), np.empty(capacity, dtype=np.int64),
-                   np.empty(capacity, dtype=np.int64), np.empty((3, 3)), np.empty((3, 16, 3)),
+                   np.empty(capacity, dtype=np.int64), np.empty(capacity, dtype=np.int64),
+                   np.empty(capacity), np.empty((3, 3)), np.empty((3, 16, 3)),
                    np.empty((3, 3)), np.empty((6, 6)), np.empty((6, 6)), np.empty(6), np.empty(6),
                    np.empty((2, 3, 3)))
 
@@ -190,6 +191,31 @@ def approach_weighted_centre(scratch, seed, count):
 
 
 @kernel
+def prior_impulse(scratch, seed, count, accumulated):
+    """What the pairs behind patch ``seed`` already transmitted to its body this step (their
+    contacts are contiguous, so each pair is counted once); a 3-tuple, N s."""
+    px = py = pz = 0.0
+    last = -1
+    for i in range(seed, count):
+        if scratch.group[i] == seed and scratch.source[i] != last:
+            last = scratch.source[i]
+            px += scratch.orient[i] * accumulated[last, 0]
+            py += scratch.orient[i] * accumulated[last, 1]
+            pz += scratch.orient[i] * accumulated[last, 2]
+    return px, py, pz
+
+
+@kernel
+def record_impulse(scratch, seed, accumulated, jx, jy, jz):
+    """Add impulse j (on the patch's body) to the step total of the seed contact's pair."""
+    k = scratch.source[seed]
+    o = scratch.orient[seed]
+    accumulated[k, 0] += o * jx
+    accumulated[k, 1] += o * jy
+    accumulated[k, 2] += o * jz
+
+
+@kernel
 def restitution_for(model, w, a, b, mode, ramp_e):
     """COLLISION: the pair's max(e_a, e_b); CONTACT: the ramp value; SHOCK: 0."""
     if mode == COLLISION:
@@ -200,20 +226,25 @@ def restitution_for(model, w, a, b, mode, ramp_e):
 
 
 @kernel
-def resolve_pair(state, model, geo, w, a, b, dt, lookahead, mode, ramp_e, movable_a, movable_b,
-                 scratch):
+def resolve_pair(state, model, geo, w, k, a, b, dt, lookahead, mode, ramp_e, movable_a,
+                 movable_b, scratch, accumulated):
     """Resolve the contacts of the pair (a, b) at their predicted poses (``resolve_patches``);
     returns the number of impulses applied. mode COLLISION uses the pair's restitution,
     CONTACT uses ``ramp_e``, SHOCK uses 0. movable_a/b: False treats the body as infinite
-    mass (kinematic, static, or frozen)."""
+    mass (kinematic, static, or frozen). k: the pair's index; accumulated (P, 3): each pair's
+    impulse on its body a so far in this step (read for Coulomb's limit, then added to)."""
     count = find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, 0.0, scratch)
     for i in range(count):
         scratch.partner[i] = b
-    return resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mode, ramp_e)
+        scratch.source[i] = k
+        scratch.orient[i] = 1.0
+    return resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mode, ramp_e,
+                           accumulated)
 
 
 @kernel
-def resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mode, ramp_e):
+def resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mode, ramp_e,
+                    accumulated):
     """Resolve body a's contacts in scratch (normals towards a; each against the body
     scratch.partner[i]) in phase ``mode``; returns the number of impulses applied.
 
@@ -228,6 +259,9 @@ def resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mo
     about the normal bounded by mu j_n r (r: the points' mean distance from the centroid).
     One impulse per patch, not one per point, is what lets a box come exactly to rest:
     sequential point impulses leave it rocking, and their order biases it sideways.
+    Coulomb's limit applies to the pair's impulse over the whole step: the patch wrench is
+    checked with what its pairs already transmitted this step (``accumulated``, through
+    scratch.source/orient) added, and every impulse applied is added there.
     """
     if count == 0:
         return 0
@@ -248,9 +282,11 @@ def resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mo
         mu = math.sqrt(model.friction[w, a] * model.friction[w, b])
         approaching = gather_patch(state, w, scratch, seed, count)
         if mode != COLLISION and not movable_b:
-            outcome = resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed,
-                                    count, e, mu)
+            px, py, pz = prior_impulse(scratch, seed, count, accumulated)
+            outcome, jx, jy, jz = resolve_patch(state, model, w, a, b, movable_a, movable_b,
+                                                scratch, seed, count, e, mu, px, py, pz)
             if outcome == APPLIED:
+                record_impulse(scratch, seed, accumulated, jx, jy, jz)
                 applied += 1
                 continue
             if outcome == SEPARATING:
@@ -273,6 +309,7 @@ def resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mo
         jx, jy, jz = contact_impulse(k, vx, vy, vz, nx, ny, nz, e, mu)
         apply_pair(state, model, w, a, b, movable_a, movable_b, jx, jy, jz, 0.0, 0.0, 0.0,
                    rax, ray, raz, rbx, rby, rbz)
+        record_impulse(scratch, seed, accumulated, jx, jy, jz)
         if mu > 0.0 and radius > 0.0:
             limit = mu * (jx * nx + jy * ny + jz * nz) * radius
             spin_friction(state, model, w, a, b, movable_a, movable_b, nx, ny, nz, limit)
@@ -282,7 +319,7 @@ def resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mo
 
 @kernel
 def resolve_supported_body(state, model, geo, w, body, level, current, touching, pair_a, pair_b,
-                           body_pair_start, body_pairs, dt, lookahead, scratch, wide):
+                           body_pair_start, body_pairs, dt, lookahead, scratch, wide, accumulated):
     """Shock propagation for one body of the level being processed against all its frozen
     supports at once: their contacts (deepest first per pair, normals turned towards ``body``)
     go into ``wide`` and are resolved as patches, so a box straddling two frozen boxes is held
@@ -302,8 +339,8 @@ def resolve_supported_body(state, model, geo, w, body, level, current, touching,
                                    scratch)
         if count + found > capacity:
             # no room to combine it: resolve this support on its own rather than drop it
-            applied += resolve_pair(state, model, geo, w, a, b, dt, lookahead, SHOCK, 0.0,
-                                    a == body, b == body, scratch)
+            applied += resolve_pair(state, model, geo, w, k, a, b, dt, lookahead, SHOCK, 0.0,
+                                    a == body, b == body, scratch, accumulated)
             continue
         sign = 1.0 if a == body else -1.0
         for i in range(found):
@@ -311,18 +348,23 @@ def resolve_supported_body(state, model, geo, w, body, level, current, touching,
                 wide.point[count, c] = scratch.point[i, c]
                 wide.normal[count, c] = sign * scratch.normal[i, c]
             wide.partner[count] = other
+            wide.source[count] = k
+            wide.orient[count] = sign
             count += 1
         for c in range(3):
             wide.position[other, c] = scratch.position[other, c]
             wide.position[body, c] = scratch.position[body, c]
-    return applied + resolve_patches(state, model, w, body, True, False, wide, count, SHOCK, 0.0)
+    return applied + resolve_patches(state, model, w, body, True, False, wide, count, SHOCK, 0.0,
+                                     accumulated)
 
 
 @kernel(parallel=True)
-def resolve_contacts(state, model, geo, pair_a, pair_b, pair_count, dt, mode, passes, capacity):
+def resolve_contacts(state, model, geo, pair_a, pair_b, pair_count, pair_impulse, dt, mode,
+                     passes, capacity):
     """The collision (mode COLLISION) or contact (mode CONTACT) phase for every world:
     up to ``passes`` sweeps over the candidate pairs, stopping early when a sweep applies no
-    impulse. capacity: the most contacts one pair can have."""
+    impulse. pair_impulse (B, P, 3): each pair's impulse on its body a in this step, N s
+    (accumulated here); capacity: the most contacts one pair can have."""
     num_worlds, n = state.position.shape[0], state.position.shape[1]
     lookahead = np.zeros(3)
     if mode == COLLISION:
@@ -335,9 +377,9 @@ def resolve_contacts(state, model, geo, pair_a, pair_b, pair_count, dt, mode, pa
             applied = 0
             for k in range(pair_count[w]):
                 a, b = pair_a[w, k], pair_b[w, k]
-                applied += resolve_pair(state, model, geo, w, a, b, dt, lookahead, mode, ramp_e,
+                applied += resolve_pair(state, model, geo, w, k, a, b, dt, lookahead, mode, ramp_e,
                                         model.motion[a] == DYNAMIC, model.motion[b] == DYNAMIC,
-                                        scratch)
+                                        scratch, pair_impulse[w])
             if applied == 0:
                 break
 
@@ -451,8 +493,8 @@ def pairs_by_body(n, pair_a, pair_b, pairs, touching):
 
 
 @kernel(parallel=True)
-def propagate_shock(state, model, geo, pair_a, pair_b, pair_count, dt, up, sweeps, capacity,
-                    wide_capacity):
+def propagate_shock(state, model, geo, pair_a, pair_b, pair_count, pair_impulse, dt, up, sweeps,
+                    capacity, wide_capacity):
     """The shock-propagation phase for every world (see the module docstring).
 
     up: (3,) unit vector against gravity; sweeps: passes over each level; capacity: the most
@@ -499,11 +541,12 @@ def propagate_shock(state, model, geo, pair_a, pair_b, pair_count, dt, up, sweep
                     for s in range(start, end):
                         resolve_supported_body(state, model, geo, w, by_level[s], level, current,
                                                touching, pair_a, pair_b, body_pair_start,
-                                               body_pairs, dt, lookahead, scratch, wide)
+                                               body_pairs, dt, lookahead, scratch, wide,
+                                               pair_impulse[w])
                     # then the pairs inside the level, both bodies movable
                     for k in range(pairs):
                         a, b = pair_a[w, k], pair_b[w, k]
                         if touching[k] and level[a] == current and level[b] == current:
-                            resolve_pair(state, model, geo, w, a, b, dt, lookahead, SHOCK, 0.0,
-                                         True, True, scratch)
+                            resolve_pair(state, model, geo, w, k, a, b, dt, lookahead, SHOCK,
+                                         0.0, True, True, scratch, pair_impulse[w])
             start = end
