@@ -39,9 +39,8 @@ def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
     """Advance every world of ``world`` (a :class:`rigid_gym.World`) by ``dt`` seconds."""
     s, m, geo, pairs = world.state, world.model, world.geometry, world.collider
     # light kernels run serially for a single world (waking the thread pool costs more than
-    # their work); the solver phases stay parallel: their serial twins measured 3.5x slower
-    # (29 vs 101 ms per step on a 40-body pile), a numba code-generation difference not yet
-    # understood (see docs/architecture.md)
+    # their work); the solver phases stay parallel: their serial twins measured 2.5-3.5x
+    # slower, a numba code-generation difference not yet understood (docs/architecture.md)
     k = lambda compiled: for_worlds(compiled, world.num_worlds)  # noqa: E731
     gravity = float(np.linalg.norm(m.gravity))
     on = config.phases(gravity > 0.0)
@@ -56,7 +55,8 @@ def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
     # 1. collision: at poses predicted with the old velocities, real restitution
     if on["collision"]:
         profile.run("collision", solver.resolve_contacts, s, m, geo, pairs.pair_a, pairs.pair_b,
-                    pairs.pair_count, pairs.pair_impulse, dt, solver.COLLISION, config.collision_passes, capacity)
+                    pairs.pair_count, pairs.pair_impulse, dt, solver.COLLISION,
+                    config.collision_passes, capacity)
     # 2. velocity update: V += dt (g + F/M), L += dt tau
     profile.run("update_velocities", k(integrate.update_velocities),
                 s.velocity, s.angular_momentum, s.angular_velocity, s.rotation, s.force, s.torque,
@@ -64,14 +64,14 @@ def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
     # 3. contact: predicted with the new velocities, restitution ramping from -0.9 to 0
     if on["contact"]:
         profile.run("contact", solver.resolve_contacts, s, m, geo, pairs.pair_a, pairs.pair_b,
-                    pairs.pair_count, pairs.pair_impulse, dt, solver.CONTACT, config.contact_passes, capacity)
+                    pairs.pair_count, pairs.pair_impulse, dt, solver.CONTACT,
+                    config.contact_passes, capacity)
     # 4. shock propagation: level by level from the ground up, lower levels frozen
     if on["shock_propagation"]:
         up = -m.gravity / gravity
         profile.run("shock_propagation", solver.propagate_shock, s, m, geo, pairs.pair_a,
                     pairs.pair_b, pairs.pair_count, pairs.pair_impulse, dt, up,
-                    config.shock_sweeps, capacity,
-                    SUPPORT_CONTACTS * capacity)
+                    config.shock_sweeps, capacity, SUPPORT_CONTACTS * capacity)
     # 5. position update with the final velocities: X += dt V, q by the exact rotation
     profile.run("update_positions", k(integrate.update_positions),
                 s.position, s.orientation, s.velocity, s.angular_momentum, s.angular_velocity,
