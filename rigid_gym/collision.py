@@ -16,7 +16,7 @@ from rigid_gym.kernels.broadphase import find_pairs
 from rigid_gym.kernels.contacts import detect_contacts
 from rigid_gym.kernels.jit import for_worlds
 
-SWEEP_MIN_BODIES = 32
+SWEEP_MIN_BODIES = 64
 """Bounded bodies from which sort-and-sweep beats brute force (benchmarks/collision.py)."""
 
 
