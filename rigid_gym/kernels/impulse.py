@@ -8,8 +8,10 @@ contacts (v_n < 0) get an impulse j, +j on body 1 and -j on body 2:
     static friction   j = K^-1 (-v - e v_n n)   if |j_t| <= mu j_n (the cone)  (slides 20-21)
     sliding friction  j = j_n (n - mu T), T = v_t / |v_t|,
                       j_n = -(1 + e) v_n / (n^T K (n - mu T))                  (slides 22-23)
-with K = K_1 + K_2. A non-positive sliding denominator (possible for large mu, a Painleve-type
-case) falls back to the static impulse, which always removes the approach.
+with K = K_1 + K_2. A non-positive sliding denominator (large mu with coupling, a
+Painleve-type case) falls back to the static impulse, which always removes the approach. (In
+the plane of n and T such a denominator implies the static impulse is inside the cone, so the
+sliding branch is not reached there; tests/test_impulse.py.)
 Applying j (``patch.apply_pair``): V += j / M, L += r x j, omega = I(t)^-1 L (slide 18).
 """
 

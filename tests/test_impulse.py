@@ -1,0 +1,71 @@
+"""The impulse at one contact (course notes slides 17-23), checked formula by formula."""
+
+import numpy as np
+import pytest
+
+from rigid_gym.kernels.impulse import add_point_mass_matrix, contact_impulse
+
+N = np.array([0.0, 0.0, 1.0])
+
+
+def impulse(k, v, e, mu):
+    return np.array(contact_impulse(np.asarray(k, dtype=float), *v, *N, e, mu))
+
+
+def test_point_mass_matrix_of_a_unit_cube_corner():
+    """K = (1/M) 1 + r*^T I^-1 r* (slide 19), built column by column by the kernel, equals the
+    matrix product for a unit-mass cube of edge 1 (I = M/6) at the corner r = (1/2, 1/2, -1/2)."""
+    k = np.zeros((3, 3))
+    inverse_moments = np.full(3, 6.0)
+    r = np.array([0.5, 0.5, -0.5])
+    add_point_mass_matrix(1.0, np.eye(3), inverse_moments, *r, k)
+    star = np.array([[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]])
+    np.testing.assert_allclose(k, np.eye(3) + star.T @ np.diag(inverse_moments) @ star, atol=1e-15)
+
+
+def test_frictionless_impulse():
+    """j = -(1 + e) v_n / (n^T K n) n."""
+    k = np.diag([2.0, 3.0, 4.0])
+    j = impulse(k, (0.3, -0.2, -1.0), 0.5, 0.0)
+    np.testing.assert_allclose(j, [0, 0, 1.5 * 1.0 / 4.0], atol=1e-15)
+
+
+def test_static_friction_inside_the_cone():
+    """j = K^-1 (-v - e v_n n) when |j_t| <= mu j_n: the relative velocity becomes -e v_n n."""
+    k = np.array([[2.0, 0.1, 0.2], [0.1, 3.0, 0.0], [0.2, 0.0, 4.0]])
+    v = np.array([0.1, 0.05, -2.0])
+    j = impulse(k, v, 0.5, 1.0)
+    np.testing.assert_allclose(k @ j, -v - 0.5 * v[2] * N, atol=1e-14)
+    assert np.linalg.norm(j[:2]) <= 1.0 * j[2]
+
+
+def test_sliding_friction_outside_the_cone():
+    """|j_t| would exceed mu j_n: j = j_n (n - mu T), T along the tangential velocity,
+    j_n = -(1 + e) v_n / (n^T K (n - mu T)); the normal velocity then becomes -e v_n."""
+    k = np.diag([1.0, 1.0, 1.0])
+    v = np.array([3.0, 0.0, -1.0])
+    e, mu = 0.2, 0.3
+    j = impulse(k, v, e, mu)
+    t = np.array([1.0, 0.0, 0.0])
+    jn = -(1 + e) * v[2] / (N @ k @ (N - mu * t))
+    np.testing.assert_allclose(j, jn * (N - mu * t), atol=1e-15)
+    assert (v + k @ j) @ N == pytest.approx(-e * v[2])
+
+
+def test_non_positive_sliding_denominator_leaves_the_static_impulse():
+    """A large mu with a coupled K makes n^T K (n - mu T) <= 0 (a Painleve-type case: the
+    sliding formula would pull). In the (t, n) plane that needs K_nt >= K_nn / mu, while the
+    static impulse leaving the cone would need K_nt > mu K_tt; together K_nt^2 > K_tt K_nn,
+    impossible for a positive definite K. So the static impulse is returned and stops the
+    contact (the kernel's guard also returns it should the sliding branch ever meet such a
+    denominator)."""
+    k = np.array([[1.0, 0.0, 0.5], [0.0, 1.0, 0.0], [0.5, 0.0, 1.0]])  # SPD: eigenvalues 0.5, 1, 1.5
+    v = np.array([1.0, 0.0, -1.0])
+    mu = 5.0
+    t = np.array([1.0, 0.0, 0.0])
+    assert N @ k @ (N - mu * t) <= 0.0
+    static = np.linalg.solve(k, -v)
+    assert np.linalg.norm(static[:2]) <= mu * static[2]
+    j = impulse(k, v, 0.0, mu)
+    np.testing.assert_allclose(j, static, atol=1e-14)
+    np.testing.assert_allclose(v + k @ j, 0.0, atol=1e-14)
