@@ -261,7 +261,7 @@ def resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed, co
         if solve_dense(scratch.system, rhs, size, sol):
             jx, jy, jz = sol[0], sol[1], sol[2]
             jn = jx * nx + jy * ny + jz * nz
-            mx, my, mz = moment(d, sol, tips + 1)
+            mx, my, mz = moment(d, sol, 3, tips + 1)
             mn = mx * nx + my * ny + mz * nz
             if jn <= 0.0:
                 return SEPARATING, 0.0, 0.0, 0.0
@@ -290,11 +290,7 @@ def resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed, co
     if not solve_dense(scratch.system, rhs, 1 + tips, sol):
         return UNRESOLVED, 0.0, 0.0, 0.0
     jn = sol[0]
-    mx = my = mz = 0.0
-    for k in range(tips):
-        mx += sol[1 + k] * d[k, 0]
-        my += sol[1 + k] * d[k, 1]
-        mz += sol[1 + k] * d[k, 2]
+    mx, my, mz = moment(d, sol, 1, tips)
     if jn <= 0.0:
         return SEPARATING, 0.0, 0.0, 0.0
     fn = jn + prior_x * nx + prior_y * ny + prior_z * nz
@@ -358,13 +354,14 @@ def sliding_system(big, d, k, sx, sy, sz, nx, ny, nz, out):
 
 
 @kernel
-def moment(d, sol, k):
-    """m = sum over c < k of sol[3 + c] d_c; a 3-tuple."""
+def moment(d, sol, first, k):
+    """m = sum over c < k of sol[first + c] d_c (the solved coefficients of the constrained
+    rotations); a 3-tuple."""
     mx = my = mz = 0.0
     for c in range(k):
-        mx += sol[3 + c] * d[c, 0]
-        my += sol[3 + c] * d[c, 1]
-        mz += sol[3 + c] * d[c, 2]
+        mx += sol[first + c] * d[c, 0]
+        my += sol[first + c] * d[c, 1]
+        mz += sol[first + c] * d[c, 2]
     return mx, my, mz
 
 

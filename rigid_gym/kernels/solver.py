@@ -18,8 +18,11 @@ inelastic contact phase, and a body resting on an incline still sees no approach
   up, and resolves level by level with everything below frozen (infinite mass). Leftover
   approach can then only push upper bodies: a stack cannot sink.
 
-Within a pair, approaching contacts are grouped into patches of similar normal and each patch
-gets one impulse at its centroid (see ``resolve_pair``).
+Within a pair, contacts are grouped into patches of similar normal, each resolved at once
+(``resolve_patches``): against an immovable partner by the wrench of ``patch.resolve_patch``,
+otherwise by one impulse at its centroid. Shock propagation combines a body's contacts with all
+its frozen supports into such patches (``resolve_supported_body``). Coulomb's limit applies to
+each pair's impulse over the whole step (``pair_impulse``).
 """
 
 from collections import namedtuple
