@@ -1,1 +1,28 @@
-"""The Gymnasium tasks (imported as ``rigid_gym.envs``): Push, Stack and Throw are built here."""
+"""The Gymnasium tasks (imported as ``rigid_gym.envs``), registered on ``import rigid_gym``:
+
+    import gymnasium as gym
+    import rigid_gym
+    env = gym.make("rigid_gym/Push-v0")          # or Stack, Throw; ...Dense-v0 for -distance
+
+``ENV_IDS`` lists every id. Entry points are strings, so registering imports no task module.
+"""
+
+import gymnasium as gym
+
+TASKS = {"Push": 50, "Stack": 100, "Throw": 50}
+"""Task name -> episode length in env steps of 0.04 s."""
+
+
+def _register() -> list[str]:
+    ids = []
+    for task, steps in TASKS.items():
+        for suffix, reward_type in (("", "sparse"), ("Dense", "dense")):
+            env_id = f"rigid_gym/{task}{suffix}-v0"
+            if env_id not in gym.registry:
+                gym.register(env_id, entry_point=f"rigid_gym.envs.{task.lower()}:{task}Env",
+                             max_episode_steps=steps, kwargs={"reward_type": reward_type})
+            ids.append(env_id)
+    return ids
+
+
+ENV_IDS = _register()

@@ -13,9 +13,10 @@ from rigid_gym.inertia import MassProperties, mass_properties
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
 from rigid_gym.world import World
+from rigid_gym.envs import ENV_IDS  # registers rigid_gym/Push-v0 ... with Gymnasium
 
 __all__ = [
-    "Box", "Capsule", "Compound", "MassProperties", "Mesh", "Plane", "Pose", "Scene",
+    "ENV_IDS", "Box", "Capsule", "Compound", "MassProperties", "Mesh", "Plane", "Pose", "Scene",
     "SolverConfig", "Sphere", "World", "mass_properties",
 ]
 __version__ = "0.1.0"

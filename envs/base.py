@@ -1,0 +1,289 @@
+"""The shared goal-conditioned env: a World, the suction gripper, and a task.
+
+A task subclass says which cubes it has, where they start, what the goal is and when it is
+reached; this class does everything else the same way for every task: spaces, seeding,
+domain randomisation, stepping the solver, rewards, observations and rendering.
+
+Conventions (those of panda-gym and Gymnasium-Robotics Fetch, so their HER settings transfer):
+0.04 s per env step (10 solver steps of 4 ms), Dict observations ``observation`` /
+``achieved_goal`` / ``desired_goal`` (float32), sparse reward -1 / 0 or dense -distance,
+``compute_reward`` vectorised over any leading batch shape, ``info["is_success"]``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import gymnasium as gym
+from gymnasium import spaces
+from gymnasium.error import ResetNeeded
+
+from rigid_gym.scene import Scene
+from rigid_gym.shapes import Box
+from rigid_gym.world import World
+from rigid_gym.envs.effector import SuctionGripper, Workspace
+
+STEP_TIME = 0.04
+"""s of simulated time per env step."""
+SOLVER_STEPS = 10
+"""solver steps per env step (dt = 4 ms, as panda-gym's 2 ms x 20 and Fetch's 2 ms x 20)."""
+DISTANCE_THRESHOLD = 0.05
+"""m: a goal position is reached within this distance."""
+CUBE_HALF = 0.02
+"""m: half the edge of every task's cubes (4 cm cubes, as panda-gym's)."""
+CUBE_MASS = 0.1
+"""kg"""
+FRICTION = 0.5
+"""Coulomb coefficient of table, cubes and gripper (a pair uses sqrt(mu_a mu_b))."""
+GRIPPER_START = (0.0, 0.0, 0.12)
+"""m: the gripper's centre at reset."""
+RANDOMIZATION = {
+    "mass": (0.5, 2.0),
+    "friction": (0.5, 1.5),
+    "restitution": (0.0, 0.3),
+    "size": (0.8, 1.2),
+}
+"""Default domain-randomisation ranges (low, high), each drawn uniformly once per reset:
+``mass`` and ``size`` scale each cube's mass and edge, ``friction`` scales every body's
+friction (one factor per body), ``restitution`` is each cube's coefficient."""
+ROTATION_FEATURES = 6
+"""An orientation is observed as the first two columns of its rotation matrix (continuous,
+unlike a quaternion's sign or Euler angles)."""
+OBJECT_FEATURES = 3 + 3 + ROTATION_FEATURES + 3 + 3
+
+
+class RigidGymEnv(gym.Env):
+    """Base of every task; see a task's docstring (PushEnv, StackEnv, ThrowEnv) for its tables.
+
+    Subclasses set ``num_cubes``, ``has_grip`` and ``goal_size`` and implement
+    ``_place_cubes``, ``_add_fixtures``, ``_sample_goal``, ``_achieved_goal`` and
+    ``goal_reached``.
+    """
+
+    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": round(1 / STEP_TIME)}
+    num_cubes: int = 1
+    has_grip: bool = False
+    goal_size: int = 3
+
+    def __init__(self, render_mode: str | None = None, reward_type: str = "sparse",
+                 terminate_on_success: bool = False, randomize: bool | dict = False,
+                 observation_noise: float = 0.0):
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"{type(self).__name__}: render_mode must be None or one of "
+                             f"{self.metadata['render_modes']}, got {render_mode!r}")
+        if reward_type not in ("sparse", "dense"):
+            raise ValueError(f"{type(self).__name__}: reward_type must be 'sparse' or 'dense', "
+                             f"got {reward_type!r}")
+        if not isinstance(terminate_on_success, bool):
+            raise ValueError(f"{type(self).__name__}: terminate_on_success must be a bool, "
+                             f"got {terminate_on_success!r}")
+        noise = float(observation_noise)
+        if not np.isfinite(noise) or noise < 0.0:
+            raise ValueError(f"{type(self).__name__}: observation_noise must be a finite standard "
+                             f"deviation >= 0, got {observation_noise!r}")
+        self.render_mode = render_mode
+        self.reward_type = reward_type
+        self.terminate_on_success = terminate_on_success
+        self.randomization = _randomization_ranges(randomize, type(self).__name__)
+        self.observation_noise = noise
+        size = 6 + int(self.has_grip) + OBJECT_FEATURES * self.num_cubes
+        vector = lambda n: spaces.Box(-np.inf, np.inf, shape=(n,), dtype=np.float32)  # noqa: E731
+        self.observation_space = spaces.Dict({
+            "observation": vector(size),
+            "achieved_goal": vector(self.goal_size),
+            "desired_goal": vector(self.goal_size),
+        })
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(3 + int(self.has_grip),),
+                                       dtype=np.float32)
+        self.world: World | None = None
+        self.gripper: SuctionGripper | None = None
+        self.goal = np.zeros(self.goal_size)
+        self._renderer = None
+
+    # -- the Gymnasium API -------------------------------------------------------------------
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        rng = self.np_random
+        factors = {name: rng.uniform(low, high, size=self.num_cubes + 2)
+                   for name, (low, high) in self.randomization.items()}
+        half = CUBE_HALF * factors.get("size", np.ones(self.num_cubes))[:self.num_cubes]
+        friction = FRICTION * factors.get("friction", np.ones(self.num_cubes + 2))
+        restitution = factors.get("restitution", np.zeros(self.num_cubes))[:self.num_cubes]
+        mass = CUBE_MASS * factors.get("mass", np.ones(self.num_cubes))[:self.num_cubes]
+
+        scene = Scene()
+        scene.add_ground(friction=friction[-1], name="table")
+        self.cube_half = half
+        starts = self._place_cubes(half)
+        cubes = [scene.add_body(Box((h, h, h)), mass=m, position=p, friction=f, restitution=e,
+                                name=f"cube{k}")
+                 for k, (h, m, p, f, e) in enumerate(zip(half, mass, starts, friction,
+                                                         restitution))]
+        gripper = scene.add_body(SuctionGripper.shape, kinematic=True, position=GRIPPER_START,
+                                 friction=friction[-2], name="gripper")
+        self._add_fixtures(scene)
+        self.scene = scene
+        self.world = World(scene, dt=STEP_TIME / SOLVER_STEPS)
+        self.cubes = cubes
+        self.gripper = SuctionGripper(self.world, gripper, cubes, [(h, h, h) for h in half],
+                                      STEP_TIME, Workspace())
+        self.goal = self._sample_goal()
+        self._renderer = None
+        observation = self._observation()
+        return observation, {"is_success": self._is_success(observation)}
+
+    def step(self, action):
+        if self.world is None:
+            raise ResetNeeded(f"{type(self).__name__}.step: call reset() before step()")
+        action = np.asarray(action, dtype=np.float64)
+        if action.shape != self.action_space.shape:
+            raise ValueError(f"{type(self).__name__}.step: action must have shape "
+                             f"{self.action_space.shape}, got {action.shape}")
+        if not np.all(np.isfinite(action)):
+            raise ValueError(f"{type(self).__name__}.step: action must be finite (NaN and inf "
+                             f"are refused), got {action.tolist()}")
+        action = np.clip(action, -1.0, 1.0)  # documented: outside [-1, 1] is clipped
+        self.gripper.command(action[:3], action[3] if self.has_grip else None)
+        for _ in range(SOLVER_STEPS):
+            self.world.step(1)
+            self.gripper.carry()
+        observation = self._observation()
+        success = self._is_success(observation)
+        info = {"is_success": success}
+        reward = float(self.compute_reward(observation["achieved_goal"],
+                                           observation["desired_goal"], info))
+        terminated = self.terminate_on_success and success
+        if self.render_mode == "human":
+            self.render()
+        return observation, reward, terminated, False, info
+
+    def compute_reward(self, achieved_goal, desired_goal, info=None):
+        """Reward for goals of shape (..., goal_size) -> shape (...): sparse -1 / 0 (0 when
+        ``goal_reached``), dense minus the Euclidean distance between the goals (m). ``info``
+        is not used (HER passes a list of dicts)."""
+        achieved_goal = np.asarray(achieved_goal, dtype=np.float64)
+        desired_goal = np.asarray(desired_goal, dtype=np.float64)
+        if self.reward_type == "dense":
+            return -np.linalg.norm(achieved_goal - desired_goal, axis=-1)
+        return self.goal_reached(achieved_goal, desired_goal).astype(np.float64) - 1.0
+
+    def render(self):
+        if self.render_mode is None:
+            gym.logger.warn(f"{type(self).__name__}.render: no render_mode was given at "
+                            "construction; pass render_mode='rgb_array' or 'human'")
+            return None
+        if self.world is None:
+            raise ResetNeeded(f"{type(self).__name__}.render: call reset() before render()")
+        frame = self._render_frame()
+        if self.render_mode == "human":
+            _show_in_viewer(frame)
+            return None
+        return frame
+
+    def close(self):
+        self._renderer = None
+
+    # -- what every task shares --------------------------------------------------------------
+
+    def _observation(self) -> dict:
+        w = self.world
+        g = self.gripper
+        parts = [g.position, g.velocity]
+        if self.has_grip:
+            parts.append([float(g.held is not None)])
+        for body in self.cubes:
+            parts += [w.position[body], w.position[body] - g.position,
+                      w.rotation[body][:, :2].T.ravel(), w.velocity[body],
+                      w.angular_velocity[body]]
+        vector = np.concatenate([np.ravel(p) for p in parts])
+        if self.observation_noise > 0.0:
+            vector = vector + self.np_random.normal(0.0, self.observation_noise, vector.shape)
+        return {
+            "observation": vector.astype(np.float32),
+            "achieved_goal": self._achieved_goal().astype(np.float32),
+            "desired_goal": self.goal.astype(np.float32),
+        }
+
+    def _is_success(self, observation: dict) -> bool:
+        """Judged on the observed (float32) goals, exactly as ``compute_reward`` sees them."""
+        return bool(self.goal_reached(np.asarray(observation["achieved_goal"], np.float64),
+                                      np.asarray(observation["desired_goal"], np.float64)))
+
+    def _render_frame(self) -> np.ndarray:
+        from rigid_gym.render import Renderer
+
+        if self._renderer is None:
+            self._renderer = Renderer(self.scene)
+            self._add_markers(self._renderer)
+        return self._renderer.render(self.world.position, self.world.orientation)
+
+    # -- what a task says --------------------------------------------------------------------
+
+    def _place_cubes(self, half: np.ndarray) -> list:
+        """Start positions (3,) m of the cubes with half edges ``half`` (k,), from np_random."""
+        raise NotImplementedError
+
+    def _add_fixtures(self, scene: Scene) -> None:
+        """Add static bodies beyond the table (the bin of Throw); none by default."""
+
+    def _sample_goal(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def _achieved_goal(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def goal_reached(self, achieved_goal: np.ndarray, desired_goal: np.ndarray) -> np.ndarray:
+        """(..., goal_size) goals -> (...) bool."""
+        raise NotImplementedError
+
+    def _add_markers(self, renderer) -> None:
+        """Goal markers for rgb_array frames."""
+        raise NotImplementedError
+
+
+def _randomization_ranges(randomize, where: str) -> dict:
+    """``randomize``: False (off), True (RANDOMIZATION) or a dict naming some of its keys with
+    (low, high) ranges. Returns the ranges in use."""
+    if isinstance(randomize, bool):
+        return dict(RANDOMIZATION) if randomize else {}
+    if not isinstance(randomize, dict):
+        raise ValueError(f"{where}: randomize must be a bool or a dict of ranges, "
+                         f"got {randomize!r}")
+    unknown = set(randomize) - set(RANDOMIZATION)
+    if unknown:
+        raise ValueError(f"{where}: randomize has unknown key(s) {sorted(unknown)}; "
+                         f"allowed: {sorted(RANDOMIZATION)}")
+    ranges = {}
+    for name, value in randomize.items():
+        try:
+            low, high = (float(v) for v in value)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{where}: randomize[{name!r}] must be a (low, high) pair, "
+                             f"got {value!r}") from exc
+        floor, ceiling = (0.0, 1.0) if name == "restitution" else (1e-3, 1e3)
+        if not floor <= low <= high <= ceiling:
+            raise ValueError(f"{where}: randomize[{name!r}] must satisfy {floor} <= low <= high "
+                             f"<= {ceiling}, got {value!r}")
+        ranges[name] = (low, high)
+    return ranges
+
+
+def _show_in_viewer(frame: np.ndarray) -> None:
+    """render_mode='human': stream the frame to a rerun viewer, started on first use."""
+    import rerun as rr
+
+    if rr.get_global_data_recording() is None:
+        rr.init("rigid_gym", spawn=True)
+    rr.log("camera", rr.Image(frame))
+
+
+def sample_apart(rng: np.random.Generator, half_range: float, others, min_distance: float,
+                 tries: int = 1000) -> np.ndarray:
+    """A point (2,) uniform in [-half_range, half_range]^2 (m) at least ``min_distance`` (m)
+    from every point in ``others`` (each (2,)); rejection sampling from ``rng``."""
+    for _ in range(tries):
+        point = rng.uniform(-half_range, half_range, size=2)
+        if all(np.linalg.norm(point - np.asarray(o)[:2]) >= min_distance for o in others):
+            return point
+    raise RuntimeError(f"sample_apart: no point {min_distance} m from {len(others)} others in "
+                       f"{tries} tries; the ranges are too tight")

@@ -1,0 +1,163 @@
+"""The floating suction gripper every task is driven through.
+
+The gripper is a kinematic body (a flat box, infinite mass): each env step the action sets its
+velocity, and the solver moves it and lets it push whatever it meets. Two things are not
+plain physics, and both stand for the robot arm that is not simulated:
+
+* **Suction.** Closing the grip while the pad touches an object (a contact within
+  ``GRIP_MARGIN``) attaches that object rigidly at its current offset; while held it is carried
+  with the gripper's pose and velocity at every solver step. Opening releases it with the
+  gripper's velocity at that instant (the velocity of the step being started).
+* **Force limit.** An arm stops when it presses a body into the table; a kinematic body would
+  not (it would crush the body through the table, which no solver can resolve). So a downward
+  move stops where the lowest point of the gripper (or of the object it holds) meets the top
+  of a free object under its footprint, or the table.
+
+Everything else (pushing, tipping, sliding, flight after release) is the solver's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rigid_gym import quaternion as quat
+from rigid_gym.shapes import Box
+
+STEP_DISTANCE = 0.05
+"""m the gripper moves per env step along an axis at action 1 (panda-gym's and Fetch's scale)."""
+PAD_HALF_EXTENTS = (0.02, 0.02, 0.015)
+"""Half extents (m) of the gripper's pad."""
+GRIP_MARGIN = 0.004
+"""m: how close the pad must be to an object for suction to grip it."""
+FOOTPRINT_SLACK = 1e-3
+"""m: footprints must overlap by more than this for a body to count as under the gripper."""
+
+
+@dataclass(frozen=True)
+class Workspace:
+    """The box the gripper's centre stays in, m (world frame, z up; the table top is z = 0)."""
+
+    low: tuple[float, float, float] = (-0.25, -0.25, PAD_HALF_EXTENTS[2])
+    high: tuple[float, float, float] = (0.25, 0.25, 0.3)
+
+    def clip(self, position: np.ndarray) -> np.ndarray:
+        return np.clip(position, self.low, self.high)
+
+
+class SuctionGripper:
+    """Drives body ``body`` of a world (a kinematic Box of ``PAD_HALF_EXTENTS``).
+
+    objects: indices of the dynamic bodies it may push and grip, each a Box; ``half_extents``
+        (k, 3) m their sizes. ``step_time``: s per env step.
+    """
+
+    shape = Box(PAD_HALF_EXTENTS)
+
+    def __init__(self, world, body: int, objects, half_extents, step_time: float,
+                 workspace: Workspace = Workspace()):
+        self.world = world
+        self.body = body
+        self.objects = list(objects)
+        self.half_extents = np.asarray(half_extents, dtype=np.float64).reshape(-1, 3)
+        self.step_time = step_time
+        self.workspace = workspace
+        self.held: int | None = None  # index into self.objects
+        self._offset_position = np.zeros(3)  # held object's centre in the gripper frame, m
+        self._offset_orientation = np.array([1.0, 0.0, 0.0, 0.0])
+
+    @property
+    def position(self) -> np.ndarray:
+        return self.world.position[self.body]
+
+    @property
+    def velocity(self) -> np.ndarray:
+        return self.world.velocity[self.body]
+
+    def command(self, motion: np.ndarray, grip: float | None) -> None:
+        """Start an env step: ``motion`` (3,) in [-1, 1] scales ``STEP_DISTANCE``; ``grip`` > 0
+        closes the suction, <= 0 opens it, None leaves it (tasks without a grip)."""
+        target = self.workspace.clip(self.position + STEP_DISTANCE * motion)
+        target[2] = max(target[2], min(self.position[2], self._lowest_centre(target)))
+        velocity = (target - self.position) / self.step_time
+        self.world.set_velocity(self.body, velocity=velocity, angular_velocity=np.zeros(3))
+        if grip is not None and grip > 0.0 and self.held is None:
+            self._try_grip()
+        self.carry()  # the held object moves with the velocity of the step being started
+        if grip is not None and grip <= 0.0:
+            self.held = None
+
+    def carry(self) -> None:
+        """Put the held object (if any) at its offset from the gripper, moving with it. Called
+        before every solver step of an env step and once after the last."""
+        if self.held is None:
+            return
+        w = self.world
+        q = w.orientation[self.body]
+        body = self.objects[self.held]
+        w.set_pose(body, position=self.position + quat.rotate(q, self._offset_position),
+                   orientation=quat.multiply(q, self._offset_orientation))
+        w.set_velocity(body, velocity=self.velocity, angular_velocity=np.zeros(3))
+
+    # -- helpers -------------------------------------------------------------------------------
+
+    def _try_grip(self) -> None:
+        contacts = self.world.contacts(margin=GRIP_MARGIN)
+        for k, body in enumerate(self.objects):
+            pair = ((contacts.body_a == body) & (contacts.body_b == self.body)) | (
+                (contacts.body_a == self.body) & (contacts.body_b == body))
+            if np.any(pair):
+                w = self.world
+                q_inv = quat.conjugate(w.orientation[self.body])
+                self._offset_position = quat.rotate(q_inv, w.position[body] - self.position)
+                self._offset_orientation = quat.multiply(q_inv, w.orientation[body])
+                self.held = k
+                return
+
+    def _lowest_centre(self, target: np.ndarray) -> float:
+        """The lowest z the gripper's centre may take at ``target``'s x, y: where it, or the
+        object it holds, would rest on the table or on the top of a free object under it."""
+        w = self.world
+        shift = target - self.position
+        column = [(target, w.rotation[self.body], PAD_HALF_EXTENTS)]
+        if self.held is not None:
+            body = self.objects[self.held]
+            column.append((w.position[body] + shift, w.rotation[body],
+                           self.half_extents[self.held]))
+        lowest = -np.inf
+        for centre, rotation, half in column:
+            part = box_corners(centre, rotation, half)
+            height = target[2] - part[:, 2].min()  # from this part's bottom to the pad's centre
+            lowest = max(lowest, height)  # resting on the table (z = 0)
+            for k, body in enumerate(self.objects):
+                if k == self.held:
+                    continue
+                other = box_corners(w.position[body], w.rotation[body], self.half_extents[k])
+                top = other[:, 2].max()
+                below = top <= part[:, 2].min() - shift[2] + FOOTPRINT_SLACK
+                if below and footprints_overlap(part, rotation, other, w.rotation[body]):
+                    lowest = max(lowest, top + height)
+        return lowest
+
+
+def box_corners(centre: np.ndarray, rotation: np.ndarray, half_extents) -> np.ndarray:
+    """(8, 3) corners, m, of a box at ``centre`` (3,) with ``rotation`` (3, 3)."""
+    signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    return centre + (signs * np.asarray(half_extents)) @ rotation.T
+
+
+def footprints_overlap(corners_a, rotation_a, corners_b, rotation_b) -> bool:
+    """Whether two boxes' shadows on the table (their corners (8, 3) projected on x, y)
+    overlap by more than FOOTPRINT_SLACK: separating axes are x, y and the normals of the
+    projected box edges."""
+    axes = [np.array([1.0, 0.0]), np.array([0.0, 1.0])]
+    for rotation in (rotation_a, rotation_b):
+        for edge in rotation[:2].T:  # each box axis, projected on x, y
+            if np.linalg.norm(edge) > 1e-9:
+                axes.append(np.array([-edge[1], edge[0]]) / np.linalg.norm(edge))
+    for axis in axes:
+        a, b = corners_a[:, :2] @ axis, corners_b[:, :2] @ axis
+        if min(a.max(), b.max()) - max(a.min(), b.min()) <= FOOTPRINT_SLACK:
+            return False
+    return True

@@ -1,0 +1,83 @@
+"""Push: slide a cube across the table to a target; the gripper cannot grip."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rigid_gym.envs.base import DISTANCE_THRESHOLD, RigidGymEnv, sample_apart
+from rigid_gym.shapes import Sphere
+
+OBJECT_RANGE = 0.15
+"""m: the cube starts at x, y uniform in [-0.15, 0.15] (panda-gym's and Fetch's range)."""
+GOAL_RANGE = 0.15
+"""m: the target is at x, y uniform in [-0.15, 0.15], on the table."""
+
+
+class PushEnv(RigidGymEnv):
+    """Push a 4 cm cube to a target on the table with a floating pad that cannot grip.
+
+    Friction decides how the cube slides and turns; the pad is a kinematic box, so the cube
+    only moves when the pad meets it.
+
+    ## Action space
+    ``Box(-1, 1, (3,), float32)``: the pad's displacement this step, x 0.05 m per unit along
+    x, y, z (so at most 1.25 m/s per axis). Values outside [-1, 1] are clipped; NaN or inf
+    raise ``ValueError``. The pad's centre stays in x, y in [-0.25, 0.25] m, z in
+    [0.015, 0.3] m, and a downward move stops on the cube or the table (the arm's force limit,
+    see ``rigid_gym.envs.effector``).
+
+    ## Observation space
+    ``Dict`` of float32 vectors:
+
+    | key | size | content |
+    |---|---|---|
+    | observation | 24 | pad position (3, m), pad velocity (3, m/s); cube position (3), cube minus pad position (3), cube orientation (6: the first two columns of its rotation matrix), cube velocity (3, m/s), cube angular velocity (3, rad/s) |
+    | achieved_goal | 3 | cube position, m |
+    | desired_goal | 3 | target position, m (z = the cube's half edge: on the table) |
+
+    ``observation_noise`` adds N(0, sigma^2) to every entry of ``observation`` (not to goals).
+
+    ## Rewards
+    sparse (``reward_type="sparse"``, the default): 0 when the cube's centre is within 0.05 m
+    of the target, else -1. dense: minus the distance, m. ``compute_reward`` takes batches.
+
+    ## Starting state
+    Cube at x, y uniform in [-0.15, 0.15] m, resting on the table, unrotated; target x, y in
+    [-0.15, 0.15] m at least 0.05 m from the cube; pad at (0, 0, 0.12) m, at rest.
+
+    ## Episode end
+    Truncated after 50 steps (2 s) by ``gym.make``'s TimeLimit (``max_episode_steps=`` to
+    change it). Terminated on success only with ``terminate_on_success=True`` (default False,
+    as in Fetch: an agent learns to keep the cube at the target). ``info["is_success"]``.
+
+    ## Arguments
+    | argument | default | meaning |
+    |---|---|---|
+    | render_mode | None | "rgb_array" (480 x 480 frames, no display needed) or "human" (rerun viewer) |
+    | reward_type | "sparse" | "sparse" or "dense" (the ``Dense`` ids) |
+    | terminate_on_success | False | end the episode when the goal is reached |
+    | randomize | False | True, or a dict of ranges, to redraw cube mass, size, restitution and friction each reset (``rigid_gym.envs.base.RANDOMIZATION``) |
+    | observation_noise | 0.0 | standard deviation of Gaussian noise on ``observation`` |
+    """
+
+    num_cubes = 1
+    has_grip = False
+    goal_size = 3
+
+    def _place_cubes(self, half):
+        xy = self.np_random.uniform(-OBJECT_RANGE, OBJECT_RANGE, size=2)
+        return [(xy[0], xy[1], half[0])]
+
+    def _sample_goal(self):
+        cube = self.world.position[self.cubes[0]]
+        xy = sample_apart(self.np_random, GOAL_RANGE, [cube], DISTANCE_THRESHOLD)
+        return np.array([xy[0], xy[1], self.cube_half[0]])
+
+    def _achieved_goal(self):
+        return self.world.position[self.cubes[0]].copy()
+
+    def goal_reached(self, achieved_goal, desired_goal):
+        return np.linalg.norm(achieved_goal - desired_goal, axis=-1) < DISTANCE_THRESHOLD
+
+    def _add_markers(self, renderer):
+        renderer.add_marker(Sphere(0.02), self.goal, (0.2, 0.8, 0.3))

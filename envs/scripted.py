@@ -1,0 +1,135 @@
+"""Hand-written policies for every task: baselines that need no training, used by the tests,
+the benchmarks and ``rigid-gym record --policy scripted``.
+
+Each policy is a function of the observation dict alone (no memory), so it can resume from
+any state:
+
+    policy = scripted_policy(env)          # env: any rigid_gym env, wrapped or not
+    action = policy(observation)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rigid_gym.envs.base import CUBE_HALF, FRICTION, OBJECT_FEATURES, STEP_TIME, RigidGymEnv
+from rigid_gym.envs.effector import PAD_HALF_EXTENTS, STEP_DISTANCE
+
+PAD_HALF_HEIGHT = PAD_HALF_EXTENTS[2]
+CRUISE_HEIGHT = 0.12
+"""m: pad centre height for moving over cubes."""
+ALIGNED = 0.006
+"""m: x, y error under which the pad counts as above (or behind) its mark."""
+G = 9.81
+
+
+def scripted_policy(env):
+    """The scripted policy for ``env``'s task: a function observation dict -> action."""
+    task = env.unwrapped
+    if not isinstance(task, RigidGymEnv):
+        raise ValueError(f"scripted_policy: expected a rigid_gym env, got {type(task).__name__}")
+    return {"PushEnv": _push, "StackEnv": _stack, "ThrowEnv": _throw}[type(task).__name__]
+
+
+def _toward(pad: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """The motion part of an action that moves the pad toward ``target`` (full speed when far)."""
+    return np.clip((target - pad) / STEP_DISTANCE, -1.0, 1.0)
+
+
+def _cube(observation: np.ndarray, k: int, has_grip: bool) -> np.ndarray:
+    start = 6 + int(has_grip) + OBJECT_FEATURES * k
+    return observation[start:start + 3].astype(np.float64)
+
+
+def _above(pad, point, height) -> np.ndarray:
+    """Motion to reach (point x, y, height): rise first if low and not yet above it."""
+    target = np.array([point[0], point[1], height])
+    if np.linalg.norm(pad[:2] - point[:2]) > ALIGNED and pad[2] < height - 0.02:
+        target = np.array([pad[0], pad[1], height])
+    return _toward(pad, target)
+
+
+def _push(observation: dict) -> np.ndarray:
+    """Get behind the cube on the line from the target through it, then push along that line."""
+    obs = observation["observation"]
+    pad = obs[:3].astype(np.float64)
+    cube = _cube(obs, 0, False)
+    goal = observation["desired_goal"].astype(np.float64)
+    line = goal[:2] - cube[:2]
+    distance = np.linalg.norm(line)
+    if distance < 0.01:
+        return np.zeros(3)
+    direction = np.append(line / distance, 0.0)
+    # stand off by the cube's widest half (its diagonal, whatever its turn) plus the pad's
+    # half width along the line (the pad never turns)
+    standoff = np.sqrt(2) * CUBE_HALF + PAD_HALF_EXTENTS[0] * np.abs(direction).sum() + 0.005
+    behind = cube - direction * standoff
+    behind[2] = cube[2]
+    if np.linalg.norm(pad[:2] - behind[:2]) > 2 * ALIGNED or pad[2] > cube[2] + 0.01:
+        if pad[2] < 2 * cube[2] + PAD_HALF_HEIGHT + 0.01 and \
+                np.linalg.norm(pad[:2] - behind[:2]) > 2 * ALIGNED:
+            return _toward(pad, np.array([pad[0], pad[1], CRUISE_HEIGHT]))  # clear the cube
+        return _above(pad, behind, CRUISE_HEIGHT) if np.linalg.norm(
+            pad[:2] - behind[:2]) > 2 * ALIGNED else _toward(pad, behind)
+    # push no faster than the cube can slide to a stop at the target: v^2 = 2 mu g d
+    speed = 0.7 * np.sqrt(2.0 * FRICTION * G * distance)
+    return _toward(pad, behind + direction * min(speed * STEP_TIME, STEP_DISTANCE))
+
+
+def _carry(pad, cube, target, held) -> np.ndarray:
+    """Pick ``cube`` up and put it down with its centre at ``target``: (motion, grip)."""
+    if not held:
+        top = cube + np.array([0.0, 0.0, CUBE_HALF + PAD_HALF_HEIGHT])
+        if np.linalg.norm(pad[:2] - top[:2]) > ALIGNED:
+            return np.append(_above(pad, top, CRUISE_HEIGHT), -1.0)
+        return np.append(_toward(pad, top - np.array([0, 0, 0.01])), 1.0)
+    offset = pad - cube
+    goal_pad = target + offset
+    if np.linalg.norm(cube[:2] - target[:2]) > ALIGNED:
+        return np.append(_above(pad, goal_pad, CRUISE_HEIGHT + 0.02), 1.0)
+    if cube[2] > target[2] + 0.002:
+        return np.append(_toward(pad, goal_pad), 1.0)
+    return np.append(np.zeros(3), -1.0)
+
+
+def _stack(observation: dict) -> np.ndarray:
+    """Carry cube 0 to the tower's base, then cube 1 onto it; then let go and rise."""
+    obs = observation["observation"]
+    pad, held = obs[:3].astype(np.float64), obs[6] > 0.5
+    goal = observation["desired_goal"].astype(np.float64)
+    cubes = [_cube(obs, 0, True), _cube(obs, 1, True)]
+    for k in (0, 1):
+        target = goal[3 * k:3 * k + 3]
+        if np.linalg.norm(cubes[k] - target) > 0.01:
+            holding_other = held and np.linalg.norm(pad[:2] - cubes[1 - k][:2]) < 0.01
+            if holding_other:
+                return np.append(np.zeros(3), -1.0)
+            return _carry(pad, cubes[k], target, held)
+    return np.array([0.0, 0.0, 1.0, -1.0])
+
+
+def _throw(observation: dict) -> np.ndarray:
+    """Pick the cube up, carry it to the launch point, release it on a ballistic arc to the bin."""
+    obs = observation["observation"]
+    pad, held = obs[:3].astype(np.float64), obs[6] > 0.5
+    cube = _cube(obs, 0, True)
+    goal = observation["desired_goal"].astype(np.float64)
+    if not held:
+        if cube[2] > 0.03 or np.linalg.norm(cube[:2]) > 0.3:  # in flight or thrown:
+            return np.array([-1.0, 0.0, 1.0, -1.0])  # follow through up and back, out of its way
+        return _carry(pad, cube, cube, False)
+    # launch low and short of the workspace's edges, so that the release step's motion is not
+    # clipped (a clipped move would change the release velocity)
+    launch = np.array([0.15, np.clip(goal[1] * 0.5, -0.15, 0.15), 0.2])
+    if np.linalg.norm(pad - launch) > 0.01:
+        return np.append(_toward(pad, launch), 1.0)
+    velocity = _launch_velocity(cube, goal)
+    return np.append(np.clip(velocity * STEP_TIME / STEP_DISTANCE, -1.0, 1.0), -1.0)
+
+
+def _launch_velocity(start: np.ndarray, goal: np.ndarray, vertical: float = 1.25) -> np.ndarray:
+    """Velocity (3,) m/s with vertical component ``vertical`` that carries a point from
+    ``start`` to ``goal`` under gravity (descending branch of the parabola)."""
+    drop = start[2] - goal[2]
+    time = (vertical + np.sqrt(vertical ** 2 + 2 * G * drop)) / G
+    return np.array([(goal[0] - start[0]) / time, (goal[1] - start[1]) / time, vertical])

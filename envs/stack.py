@@ -1,0 +1,93 @@
+"""Stack: build a two-cube tower at a target, the first cube on the table, the second on it."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rigid_gym.envs.base import CUBE_HALF, DISTANCE_THRESHOLD, RigidGymEnv, sample_apart
+from rigid_gym.shapes import Box
+
+OBJECT_RANGE = 0.15
+"""m: each cube starts at x, y uniform in [-0.15, 0.15]."""
+CUBE_SPACING = 0.08
+"""m: the cubes start at least this far apart (x, y), so neither starts on the other."""
+TOWER_RANGE = 0.15
+"""m: the tower's x, y are uniform in [-0.15, 0.15] ..."""
+TOWER_CLEARANCE = 0.08
+"""m: ... and at least this far from both cubes' starts."""
+
+
+class StackEnv(RigidGymEnv):
+    """Stack two 4 cm cubes into a tower at a target: cube 0 on the table, cube 1 on cube 0.
+
+    The floating pad grips by suction (see ``rigid_gym.envs.effector``): close it on a cube to
+    carry the cube, open it to let go.
+
+    ## Action space
+    ``Box(-1, 1, (4,), float32)``: the pad's displacement this step (x 0.05 m per unit along
+    x, y, z: at most 1.25 m/s per axis) and the grip (> 0 close, <= 0 open). Values outside
+    [-1, 1] are clipped; NaN or inf raise ``ValueError``. The pad's centre stays in x, y in
+    [-0.25, 0.25] m, z in [0.015, 0.3] m, and a downward move stops where the pad, or the cube
+    it holds, meets a cube or the table (the arm's force limit).
+
+    ## Observation space
+    ``Dict`` of float32 vectors:
+
+    | key | size | content |
+    |---|---|---|
+    | observation | 43 | pad position (3, m), pad velocity (3, m/s), holding (1: 1 while a cube is held); then per cube (0, 1): position (3), position minus the pad's (3), orientation (6: first two columns of the rotation matrix), velocity (3), angular velocity (3) |
+    | achieved_goal | 6 | cube 0 position, cube 1 position, m |
+    | desired_goal | 6 | the targets: cube 0 on the table at the tower's x, y; cube 1 one edge above it |
+
+    ## Rewards
+    The goal is reached when each cube is within 0.05 m of its target **and** the tower
+    stands: cube 1's centre is within half an edge (0.02 m) of cube 0's in x, y and 1.5 to 2.5
+    half edges (0.03-0.05 m) above it, i.e. resting on it. Both tests read only the goals, so
+    HER can recompute them. sparse: 0 when reached, else -1; dense: minus the distance between
+    the 6-vectors, m.
+
+    ## Starting state
+    Cubes at x, y uniform in [-0.15, 0.15] m, at least 0.08 m apart, resting, unrotated; the
+    tower at x, y uniform in [-0.15, 0.15] m at least 0.08 m from both; pad at (0, 0, 0.12) m,
+    open.
+
+    ## Episode end
+    Truncated after 100 steps (4 s) by ``gym.make``'s TimeLimit (``max_episode_steps=`` to
+    change it); terminated on success only with ``terminate_on_success=True`` (default False).
+
+    ## Arguments
+    As :class:`rigid_gym.envs.push.PushEnv`: render_mode, reward_type, terminate_on_success,
+    randomize, observation_noise.
+    """
+
+    num_cubes = 2
+    has_grip = True
+    goal_size = 6
+
+    def _place_cubes(self, half):
+        first = self.np_random.uniform(-OBJECT_RANGE, OBJECT_RANGE, size=2)
+        second = sample_apart(self.np_random, OBJECT_RANGE, [first], CUBE_SPACING)
+        return [(first[0], first[1], half[0]), (second[0], second[1], half[1])]
+
+    def _sample_goal(self):
+        starts = [self.world.position[c] for c in self.cubes]
+        x, y = sample_apart(self.np_random, TOWER_RANGE, starts, TOWER_CLEARANCE)
+        bottom, top = self.cube_half
+        return np.array([x, y, bottom, x, y, 2.0 * bottom + top])
+
+    def _achieved_goal(self):
+        return np.concatenate([self.world.position[c] for c in self.cubes])
+
+    def goal_reached(self, achieved_goal, desired_goal):
+        error = achieved_goal - desired_goal
+        near = ((np.linalg.norm(error[..., :3], axis=-1) < DISTANCE_THRESHOLD)
+                & (np.linalg.norm(error[..., 3:], axis=-1) < DISTANCE_THRESHOLD))
+        rise = achieved_goal[..., 3:] - achieved_goal[..., :3]
+        stands = ((np.linalg.norm(rise[..., :2], axis=-1) < CUBE_HALF)
+                  & (rise[..., 2] > 1.5 * CUBE_HALF) & (rise[..., 2] < 2.5 * CUBE_HALF))
+        return near & stands
+
+    def _add_markers(self, renderer):
+        for k, color in enumerate(((0.2, 0.8, 0.3), (0.3, 0.6, 0.9))):
+            h = self.cube_half[k]
+            renderer.add_marker(Box((h, h, h)), self.goal[3 * k:3 * k + 3], color)

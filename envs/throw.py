@@ -1,0 +1,118 @@
+"""Throw: pick a cube up and throw it into a bin that the gripper cannot reach."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rigid_gym.envs.base import RigidGymEnv
+from rigid_gym.shapes import Box, Compound, Pose, Sphere
+
+OBJECT_RANGE = 0.1
+"""m: the cube starts at x, y uniform in [-0.1, 0.1]."""
+BIN_X = (0.5, 0.65)
+"""m: range of the bin centre's x (the gripper's centre stops at x = 0.25)."""
+BIN_Y = (-0.15, 0.15)
+"""m: range of the bin centre's y."""
+BIN_INNER_HALF = 0.08
+"""m: half the inside width of the (square) bin."""
+BIN_WALL = (0.005, 0.04)
+"""m: half thickness and half height of its walls (8 cm high; the table is its floor)."""
+IN_BIN_HEIGHT = 0.05
+"""m: the cube counts as in the bin up to this far above its resting height there."""
+BIN_FRICTION = 0.5
+
+
+def bin_shape() -> Compound:
+    """Four walls around a square of side 2 BIN_INNER_HALF; frame at the centre, on the table."""
+    t, h = BIN_WALL
+    a = BIN_INNER_HALF + t
+    parts = []
+    for axis in (0, 1):
+        for sign in (-1.0, 1.0):
+            half = [a + t, a + t, h]
+            half[axis] = t
+            centre = [0.0, 0.0, h]
+            centre[axis] = sign * a
+            parts.append((Box(tuple(half)), Pose(centre)))
+    return Compound(tuple(parts))
+
+
+class ThrowEnv(RigidGymEnv):
+    """Throw a 4 cm cube into a bin placed beyond the gripper's reach.
+
+    Pick the cube up by suction, swing, and open the grip: the cube leaves with the pad's
+    velocity, flies, lands (restitution and friction decide the bounce and slide) and must
+    stay inside the bin's walls.
+
+    Reach: the pad moves at most 1.25 m/s per axis, so a cube released with v_x = 1.25 m/s
+    and v_z = 0 / 0.625 / 1.25 m/s from a centre height z0 lands (centre back at 0.02 m)
+    after these distances (x only; moving along x and y at once gives sqrt 2 times more):
+
+    | release height z0 | v_z = 0 | v_z = 0.625 m/s | v_z = 1.25 m/s |
+    |---|---|---|---|
+    | 0.1 m | 0.16 m | 0.26 m | 0.39 m |
+    | 0.2 m | 0.24 m | 0.33 m | 0.45 m |
+    | 0.265 m (the highest carry) | 0.28 m | 0.37 m | 0.48 m |
+
+    The pad's centre stops at x = 0.25 m, the bin's centre is 0.25 to 0.4 m beyond that
+    (x in [0.5, 0.65], y in [-0.15, 0.15]), and its near wall starts at least 0.14 m beyond
+    the farthest edge of the pad or of a cube held under it: every bin can be hit by a throw,
+    none by placing.
+
+    ## Action space
+    ``Box(-1, 1, (4,), float32)``: the pad's displacement (x 0.05 m per unit per axis per
+    step) and the grip (> 0 close, <= 0 open; opening releases with the pad's velocity).
+    Outside [-1, 1] is clipped; NaN or inf raise ``ValueError``. Workspace as PushEnv.
+
+    ## Observation space
+    | key | size | content |
+    |---|---|---|
+    | observation | 25 | pad position (3, m), pad velocity (3, m/s), holding (1); cube position (3), cube minus pad position (3), cube orientation (6), cube velocity (3, m/s), cube angular velocity (3, rad/s) |
+    | achieved_goal | 3 | cube position, m |
+    | desired_goal | 3 | the bin's centre at the height of a cube resting in it, m |
+
+    ## Rewards
+    The goal is reached when the cube is in the bin: its centre within 0.08 m (the bin's
+    inside half width) of the goal in x and in y, and within 0.05 m in z. sparse: 0 when
+    reached, else -1; dense: minus the distance, m.
+
+    ## Starting state
+    Cube at x, y uniform in [-0.1, 0.1] m, resting; bin centre x in [0.5, 0.65] m, y in
+    [-0.15, 0.15] m; pad at (0, 0, 0.12) m, open.
+
+    ## Episode end
+    Truncated after 50 steps (2 s); terminated on success only with
+    ``terminate_on_success=True`` (default False: success is judged where the cube ends).
+
+    ## Arguments
+    As :class:`rigid_gym.envs.push.PushEnv`.
+    """
+
+    num_cubes = 1
+    has_grip = True
+    goal_size = 3
+
+    def _place_cubes(self, half):
+        xy = self.np_random.uniform(-OBJECT_RANGE, OBJECT_RANGE, size=2)
+        return [(xy[0], xy[1], half[0])]
+
+    def _add_fixtures(self, scene):
+        x = self.np_random.uniform(*BIN_X)
+        y = self.np_random.uniform(*BIN_Y)
+        self.bin_centre = np.array([x, y, 0.0])
+        self.bin = scene.add_body(bin_shape(), static=True, position=self.bin_centre,
+                                  friction=BIN_FRICTION, name="bin")
+
+    def _sample_goal(self):
+        return self.bin_centre + np.array([0.0, 0.0, self.cube_half[0]])
+
+    def _achieved_goal(self):
+        return self.world.position[self.cubes[0]].copy()
+
+    def goal_reached(self, achieved_goal, desired_goal):
+        error = np.abs(achieved_goal - desired_goal)
+        return ((error[..., 0] <= BIN_INNER_HALF) & (error[..., 1] <= BIN_INNER_HALF)
+                & (error[..., 2] <= IN_BIN_HEIGHT))
+
+    def _add_markers(self, renderer):
+        renderer.add_marker(Sphere(0.015), self.goal, (0.2, 0.8, 0.3))

@@ -1,0 +1,268 @@
+"""The Gymnasium tasks: API conformance, determinism, rewards, the gripper, bad input."""
+
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.error import ResetNeeded
+from gymnasium.utils.env_checker import check_env
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+import rigid_gym
+from rigid_gym.envs.base import CUBE_HALF, CUBE_MASS, STEP_TIME
+from rigid_gym.envs.effector import PAD_HALF_EXTENTS, Workspace
+from rigid_gym.envs.scripted import scripted_policy
+
+TASK_IDS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
+
+
+def make(env_id, **kwargs):
+    return gym.make(env_id, **kwargs).unwrapped
+
+
+def test_every_id_is_registered_on_import():
+    assert rigid_gym.ENV_IDS == [
+        "rigid_gym/Push-v0", "rigid_gym/PushDense-v0", "rigid_gym/Stack-v0",
+        "rigid_gym/StackDense-v0", "rigid_gym/Throw-v0", "rigid_gym/ThrowDense-v0"]
+    assert [gym.spec(i).max_episode_steps for i in rigid_gym.ENV_IDS] == [50, 50, 100, 100, 50, 50]
+
+
+@pytest.mark.parametrize("env_id", rigid_gym.ENV_IDS)
+def test_gymnasium_and_sb3_checkers_pass(env_id):
+    # both checkers warn that the observation bounds are infinite: velocities are unbounded
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*infinity.*")
+        check_env(make(env_id), skip_render_check=True)  # includes reset(seed) then reset()
+        sb3_check_env(make(env_id))  # includes compute_reward on a batch of 2
+
+
+def run(env, actions, seed):
+    observations = [env.reset(seed=seed)[0]]
+    for action in actions:
+        observations.append(env.step(action)[0])
+    return observations
+
+
+@pytest.mark.parametrize("env_id", TASK_IDS)
+def test_same_seed_and_actions_give_bit_identical_observations(env_id):
+    env_a = gym.make(env_id, max_episode_steps=200)
+    env_b = gym.make(env_id, max_episode_steps=200)
+    actions = np.random.default_rng(3).uniform(-1, 1, (200,) + env_a.action_space.shape)
+    for obs_a, obs_b in zip(run(env_a, actions, 11), run(env_b, actions, 11)):
+        for key in obs_a:
+            assert obs_a[key].tobytes() == obs_b[key].tobytes()
+    # a different seed gives a different episode
+    other = run(env_b, actions[:1], 12)[0]["desired_goal"]
+    assert other.tobytes() != run(env_a, actions[:1], 11)[0]["desired_goal"].tobytes()
+
+
+@pytest.mark.parametrize("env_id", rigid_gym.ENV_IDS)
+def test_compute_reward_on_a_batch_equals_the_step_rewards(env_id):
+    env = gym.make(env_id)
+    task = env.unwrapped
+    policy = scripted_policy(env)  # reaches the goal: both sparse values occur
+    achieved, desired, rewards = [], [], []
+    for seed, random_share in ((0, 0.0), (1, 0.3)):
+        obs, _ = env.reset(seed=seed)
+        rng = np.random.default_rng(seed)
+        for _ in range(env.spec.max_episode_steps):
+            action = env.action_space.sample() if rng.uniform() < random_share else policy(obs)
+            obs, reward, _, _, info = env.step(action)
+            achieved.append(obs["achieved_goal"])
+            desired.append(obs["desired_goal"])
+            rewards.append(reward)
+            assert reward == task.compute_reward(obs["achieved_goal"], obs["desired_goal"], info)
+    batch = task.compute_reward(np.array(achieved), np.array(desired), [{}] * len(rewards))
+    assert batch.shape == (len(rewards),)
+    np.testing.assert_array_equal(batch, rewards)
+    if task.reward_type == "sparse":
+        assert set(rewards) == {-1.0, 0.0}
+
+
+def test_max_episode_steps_override():
+    env = gym.make("rigid_gym/Push-v0", max_episode_steps=7)
+    env.reset(seed=0)
+    truncated = [env.step(np.zeros(3))[3] for _ in range(7)]
+    assert truncated == [False] * 6 + [True]
+
+
+@pytest.mark.parametrize("env_id", TASK_IDS)
+def test_scripted_policy_solves_most_seeded_episodes(env_id):
+    env = gym.make(env_id)
+    policy = scripted_policy(env)
+    successes = 0
+    for seed in range(6):
+        obs, info = env.reset(seed=seed)
+        done = False
+        while not done:
+            obs, _, terminated, truncated, info = env.step(policy(obs))
+            done = terminated or truncated
+        successes += info["is_success"]
+    assert successes >= 5  # benchmarks/envs.py measures the rates over 100 seeds
+
+
+def test_terminate_on_success_ends_the_episode():
+    env = gym.make("rigid_gym/Push-v0", terminate_on_success=True)
+    policy = scripted_policy(env)
+    obs, _ = env.reset(seed=0)
+    for step in range(50):
+        obs, reward, terminated, truncated, info = env.step(policy(obs))
+        if terminated:
+            break
+    assert terminated and info["is_success"] and reward == 0.0 and step < 49
+
+
+# -- the gripper -------------------------------------------------------------------------------
+
+def pad_over_cube(env, cube: int = 0):
+    """Put the pad right above a cube (teleport for the test) and return the cube's position."""
+    position = env.world.position[env.cubes[cube]].copy()
+    env.world.set_pose(env.gripper.body,
+                       position=position + [0, 0, CUBE_HALF + PAD_HALF_EXTENTS[2] + 0.002])
+    return position
+
+
+def test_suction_grips_carries_and_releases_with_the_pad_velocity():
+    env = make("rigid_gym/Stack-v0")
+    env.reset(seed=0)
+    start = pad_over_cube(env)
+    obs = env.step([0, 0, -1, 1])[0]
+    assert obs["observation"][6] == 1.0  # holding
+    for _ in range(3):
+        obs = env.step([0.5, 0, 1, 1])[0]
+    cube = env.world.position[env.cubes[0]]
+    pad = env.gripper.position
+    np.testing.assert_allclose(cube[:2], start[:2] + [0.075, 0], atol=1e-12)
+    np.testing.assert_allclose(pad - cube, [0, 0, CUBE_HALF + PAD_HALF_EXTENTS[2]], atol=0.003)
+    # open while moving: the cube leaves with the pad's velocity, then flies freely
+    before = env.world.position[env.cubes[0]].copy()
+    obs = env.step([1, 0, 1, -1])[0]
+    assert obs["observation"][6] == 0.0
+    velocity = env.world.velocity[env.cubes[0]]
+    speed = 0.05 / STEP_TIME
+    np.testing.assert_allclose(velocity[:2], [speed, 0], atol=1e-12)
+    np.testing.assert_allclose(velocity[2], speed - 9.81 * STEP_TIME, atol=1e-12)
+    moved = env.world.position[env.cubes[0]] - before
+    np.testing.assert_allclose(moved[0], speed * STEP_TIME, atol=1e-12)
+
+
+def test_an_open_pad_does_not_grip_and_a_closed_pad_grips_only_what_it_touches():
+    env = make("rigid_gym/Stack-v0")
+    env.reset(seed=0)
+    pad_over_cube(env)
+    assert env.step([0, 0, 0, -1])[0]["observation"][6] == 0.0  # open
+    env.world.set_pose(env.gripper.body, position=env.gripper.position + [0, 0, 0.05])
+    assert env.step([0, 0, 0, 1])[0]["observation"][6] == 0.0  # 5 cm above: nothing to grip
+
+
+def test_pressing_down_on_a_cube_stops_at_its_top_and_leaves_it_on_the_table():
+    env = make("rigid_gym/Push-v0")
+    env.reset(seed=0)
+    start = pad_over_cube(env)
+    for _ in range(10):
+        env.step([0, 0, -1])
+    np.testing.assert_allclose(env.world.position[env.cubes[0]], start, atol=1e-9)
+    assert env.gripper.position[2] == pytest.approx(2 * CUBE_HALF + PAD_HALF_EXTENTS[2], abs=1e-9)
+
+
+def test_pad_stays_in_the_workspace():
+    env = make("rigid_gym/Push-v0")
+    env.reset(seed=0)
+    space = Workspace()
+    for action in ([1, 1, 1], [-1, -1, -1], [1, -1, 0]):
+        for _ in range(20):
+            env.step(action)
+            assert np.all(env.gripper.position >= np.array(space.low) - 1e-12)
+            assert np.all(env.gripper.position <= np.array(space.high) + 1e-12)
+
+
+def test_pushing_moves_the_cube():
+    env = make("rigid_gym/Push-v0")
+    env.reset(seed=0)
+    cube = env.world.position[env.cubes[0]].copy()
+    env.world.set_pose(env.gripper.body, position=cube - [0.06, 0, CUBE_HALF - PAD_HALF_EXTENTS[2]])
+    for _ in range(3):
+        env.step([0.5, 0, 0])
+    moved = env.world.position[env.cubes[0]] - cube
+    assert moved[0] > 0.02 and abs(moved[1]) < 1e-6 and abs(moved[2]) < 1e-6
+
+
+# -- options -----------------------------------------------------------------------------------
+
+def test_randomize_draws_new_parameters_each_reset_reproducibly():
+    env = make("rigid_gym/Stack-v0", randomize=True)
+    env.reset(seed=5)
+    masses = 1.0 / env.world.model.inverse_mass[0, env.cubes]
+    halves = env.cube_half.copy()
+    assert np.all((masses >= 0.5 * CUBE_MASS) & (masses <= 2.0 * CUBE_MASS))
+    assert np.all((halves >= 0.8 * CUBE_HALF) & (halves <= 1.2 * CUBE_HALF))
+    assert env.goal[2] == halves[0]  # the goal follows the drawn size
+    env.reset()
+    assert not np.array_equal(env.cube_half, halves)
+    env.reset(seed=5)
+    np.testing.assert_array_equal(env.cube_half, halves)
+    plain = make("rigid_gym/Stack-v0")
+    plain.reset(seed=5)
+    np.testing.assert_array_equal(plain.cube_half, [CUBE_HALF, CUBE_HALF])
+
+
+def test_randomize_accepts_chosen_ranges():
+    env = make("rigid_gym/Push-v0", randomize={"friction": (2.0, 2.0)})
+    env.reset(seed=0)
+    np.testing.assert_allclose(env.world.model.friction[0], 1.0)  # 0.5 * 2 for every body
+    assert env.cube_half[0] == CUBE_HALF
+
+
+def test_observation_noise_perturbs_the_observation_but_not_the_goals():
+    clean, _ = make("rigid_gym/Push-v0").reset(seed=0)
+    noisy, _ = make("rigid_gym/Push-v0", observation_noise=0.01).reset(seed=0)
+    difference = noisy["observation"] - clean["observation"]
+    assert 0.001 < np.std(difference) < 0.02
+    np.testing.assert_array_equal(noisy["achieved_goal"], clean["achieved_goal"])
+    np.testing.assert_array_equal(noisy["desired_goal"], clean["desired_goal"])
+
+
+# -- bad input ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -np.inf])
+def test_non_finite_actions_raise(bad):
+    env = make("rigid_gym/Push-v0")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action must be finite"):
+        env.step([0.0, bad, 0.0])
+
+
+def test_wrong_action_shape_raises():
+    env = make("rigid_gym/Push-v0")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=r"action must have shape \(3,\)"):
+        env.step([0.0, 0.0, 0.0, 1.0])
+
+
+def test_actions_outside_the_box_are_clipped():
+    big, small = make("rigid_gym/Push-v0"), make("rigid_gym/Push-v0")
+    big.reset(seed=0)
+    small.reset(seed=0)
+    np.testing.assert_array_equal(big.step([5.0, -3.0, 0.2])[0]["observation"],
+                                  small.step([1.0, -1.0, 0.2])[0]["observation"])
+
+
+def test_stepping_before_reset_is_refused():
+    with pytest.raises(ResetNeeded, match="reset"):
+        make("rigid_gym/Push-v0").step(np.zeros(3))
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"colour": "red"}, "unexpected keyword"),
+    ({"reward_type": "shaped"}, "reward_type must be"),
+    ({"render_mode": "ansi"}, "render_mode must be"),
+    ({"observation_noise": -0.1}, "observation_noise must be"),
+    ({"randomize": {"gravity": (0, 1)}}, "unknown key"),
+    ({"randomize": {"mass": (2.0, 1.0)}}, "low <= high"),
+    ({"randomize": {"restitution": (0.0, 1.5)}}, "<= 1.0"),
+    ({"terminate_on_success": 1}, "must be a bool"),
+])
+def test_bad_constructor_arguments_fail_at_construction(kwargs, message):
+    with pytest.raises((TypeError, ValueError), match=message):
+        gym.make("rigid_gym/Push-v0", **kwargs)
