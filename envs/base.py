@@ -49,6 +49,8 @@ ROTATION_FEATURES = 6
 """An orientation is observed as the first two columns of its rotation matrix (continuous,
 unlike a quaternion's sign or Euler angles)."""
 OBJECT_FEATURES = 3 + 3 + ROTATION_FEATURES + 3 + 3
+MARKER_ALPHA = 0.45
+"""Opacity of goal markers in rendered frames."""
 
 
 class RigidGymEnv(gym.Env):
@@ -63,6 +65,9 @@ class RigidGymEnv(gym.Env):
     num_cubes: int = 1
     has_grip: bool = False
     goal_size: int = 3
+    camera_view = ((0.36, -0.48, 0.4), (0.0, 0.0, 0.03), 30.0)
+    """(eye (m), target (m), vertical field of view (deg)) of the rgb_array camera: the
+    workspace from the front right, above."""
 
     def __init__(self, render_mode: str | None = None, reward_type: str = "sparse",
                  terminate_on_success: bool = False, randomize: bool | dict = False,
@@ -210,10 +215,11 @@ class RigidGymEnv(gym.Env):
                                       np.asarray(observation["desired_goal"], np.float64)))
 
     def _render_frame(self) -> np.ndarray:
-        from rigid_gym.render import Renderer
+        from rigid_gym.render import Camera, Renderer
 
         if self._renderer is None:
-            self._renderer = Renderer(self.scene)
+            eye, target, fov = self.camera_view
+            self._renderer = Renderer(self.scene, camera=Camera(eye, target, fov_deg=fov))
             self._add_markers(self._renderer)
         return self._renderer.render(self.world.position, self.world.orientation)
 
@@ -237,7 +243,7 @@ class RigidGymEnv(gym.Env):
         raise NotImplementedError
 
     def _add_markers(self, renderer) -> None:
-        """Goal markers for rgb_array frames."""
+        """Goal markers for rgb_array frames (translucent: MARKER_ALPHA)."""
         raise NotImplementedError
 
 

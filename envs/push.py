@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigid_gym.envs.base import DISTANCE_THRESHOLD, RigidGymEnv, sample_apart
+from rigid_gym.envs.base import MARKER_ALPHA, DISTANCE_THRESHOLD, RigidGymEnv, sample_apart
 from rigid_gym.shapes import Sphere
 
 OBJECT_RANGE = 0.15
@@ -80,4 +80,4 @@ class PushEnv(RigidGymEnv):
         return np.linalg.norm(achieved_goal - desired_goal, axis=-1) < DISTANCE_THRESHOLD
 
     def _add_markers(self, renderer):
-        renderer.add_marker(Sphere(0.02), self.goal, (0.2, 0.8, 0.3))
+        renderer.add_marker(Sphere(self.cube_half[0]), self.goal, (0.2, 0.8, 0.3), MARKER_ALPHA)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigid_gym.envs.base import CUBE_HALF, DISTANCE_THRESHOLD, RigidGymEnv, sample_apart
+from rigid_gym.envs.base import MARKER_ALPHA, CUBE_HALF, DISTANCE_THRESHOLD, RigidGymEnv, sample_apart
 from rigid_gym.shapes import Box
 
 OBJECT_RANGE = 0.15
@@ -88,6 +88,8 @@ class StackEnv(RigidGymEnv):
         return near & stands
 
     def _add_markers(self, renderer):
-        for k, color in enumerate(((0.2, 0.8, 0.3), (0.3, 0.6, 0.9))):
+        from rigid_gym.render import DYNAMIC_PALETTE  # each target in its cube's colour
+
+        for k, color in enumerate(DYNAMIC_PALETTE[:2]):
             h = self.cube_half[k]
-            renderer.add_marker(Box((h, h, h)), self.goal[3 * k:3 * k + 3], color)
+            renderer.add_marker(Box((h, h, h)), self.goal[3 * k:3 * k + 3], color, MARKER_ALPHA)

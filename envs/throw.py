@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigid_gym.envs.base import RigidGymEnv
+from rigid_gym.envs.base import MARKER_ALPHA, RigidGymEnv
 from rigid_gym.shapes import Box, Compound, Pose, Sphere
 
 OBJECT_RANGE = 0.1
@@ -91,6 +91,7 @@ class ThrowEnv(RigidGymEnv):
     num_cubes = 1
     has_grip = True
     goal_size = 3
+    camera_view = ((0.25, -0.9, 0.5), (0.28, 0.0, 0.04), 36.0)
 
     def _place_cubes(self, half):
         xy = self.np_random.uniform(-OBJECT_RANGE, OBJECT_RANGE, size=2)
@@ -115,4 +116,4 @@ class ThrowEnv(RigidGymEnv):
                 & (error[..., 2] <= IN_BIN_HEIGHT))
 
     def _add_markers(self, renderer):
-        renderer.add_marker(Sphere(0.015), self.goal, (0.2, 0.8, 0.3))
+        renderer.add_marker(Sphere(0.015), self.goal, (0.2, 0.8, 0.3), MARKER_ALPHA)

@@ -10,6 +10,7 @@
 
 from rigid_gym.config import SolverConfig
 from rigid_gym.inertia import MassProperties, mass_properties
+from rigid_gym.render import Camera, Renderer
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
 from rigid_gym.world import World

@@ -266,3 +266,29 @@ def test_stepping_before_reset_is_refused():
 def test_bad_constructor_arguments_fail_at_construction(kwargs, message):
     with pytest.raises((TypeError, ValueError), match=message):
         gym.make("rigid_gym/Push-v0", **kwargs)
+
+
+# -- rendering ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("env_id", TASK_IDS)
+def test_rgb_array_frames_show_the_task_and_are_reproducible(env_id):
+    frames = []
+    for _ in range(2):
+        env = gym.make(env_id, render_mode="rgb_array")
+        env.reset(seed=0)
+        env.step(env.action_space.sample() * 0)
+        frames.append(env.render())
+    frame = frames[0]
+    assert frame.shape == (480, 480, 3) and frame.dtype == np.uint8
+    assert frame.tobytes() == frames[1].tobytes()
+    assert len(np.unique(frame.reshape(-1, 3), axis=0)) > 50  # shaded, not flat
+
+
+def test_render_needs_a_mode_and_a_reset():
+    env = make("rigid_gym/Push-v0", render_mode="rgb_array")
+    with pytest.raises(ResetNeeded):
+        env.render()
+    plain = make("rigid_gym/Push-v0")
+    plain.reset(seed=0)
+    with pytest.warns(UserWarning, match="render_mode"):
+        assert plain.render() is None

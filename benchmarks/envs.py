@@ -1,0 +1,133 @@
+"""The tasks as a user meets them: scripted success rates, env steps per second, frame times.
+
+1. Scripted policies (``rigid_gym.envs.scripted``) over seeded episodes (seeds 0..N-1) of each
+   task's sparse id: success rate at the episode's end, mean return, mean episode wall time.
+2. Env steps per second through ``gym.make`` in one process (uniform random actions from a
+   seeded generator, resets included), the median of ``--repeats`` timings of ``--steps``
+   steps each after a warm-up; panda-gym's PandaPush-v3 timed the same way in the same run
+   when it is installed (``pip install panda-gym``), and our rate as a ratio to it.
+3. ``render_mode="rgb_array"`` frame time (480 x 480), the median over 20 frames of an
+   episode, after the first (compiling) frame.
+
+    python benchmarks/envs.py                    # all three tables, about 3 minutes on 2 cores
+    python benchmarks/envs.py --only speed       # one table: success, speed or render
+"""
+
+import argparse
+import statistics
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import rigid_gym  # noqa: F401  (registers the ids)
+from rigid_gym.envs.scripted import scripted_policy
+
+TASKS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
+PANDA_PUSH = "PandaPush-v3"
+
+
+def scripted_success(env_id: str, episodes: int) -> tuple[float, float, float]:
+    """(success rate, mean return, mean seconds per episode) of the scripted policy."""
+    env = gym.make(env_id)
+    policy = scripted_policy(env)
+    successes, returns = [], []
+    start = time.perf_counter()
+    for seed in range(episodes):
+        obs, info = env.reset(seed=seed)
+        total, done = 0.0, False
+        while not done:
+            obs, reward, terminated, truncated, info = env.step(policy(obs))
+            total += reward
+            done = terminated or truncated
+        successes.append(info["is_success"])
+        returns.append(total)
+    seconds = (time.perf_counter() - start) / episodes
+    return float(np.mean(successes)), float(np.mean(returns)), seconds
+
+
+def steps_per_second(env_id: str, steps: int, repeats: int) -> float:
+    """Median env steps/s over ``repeats`` runs of ``steps`` random steps (resets included)."""
+    env = gym.make(env_id)
+    rng = np.random.default_rng(0)
+    env.reset(seed=0)
+    env.action_space.seed(0)
+
+    def run(count):
+        for _ in range(count):
+            action = rng.uniform(-1, 1, env.action_space.shape).astype(np.float32)
+            _, _, terminated, truncated, _ = env.step(action)
+            if terminated or truncated:
+                env.reset()
+
+    run(100)  # warm-up: numba kernels compiled or loaded from the cache
+    rates = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run(steps)
+        rates.append(steps / (time.perf_counter() - start))
+    env.close()
+    return statistics.median(rates)
+
+
+def frame_milliseconds(env_id: str, frames: int = 20) -> float:
+    env = gym.make(env_id, render_mode="rgb_array")
+    env.reset(seed=0)
+    env.render()  # first frame: compiles the rasteriser, tessellates the shapes
+    times = []
+    for _ in range(frames):
+        env.step(env.action_space.sample())
+        start = time.perf_counter()
+        env.render()
+        times.append(time.perf_counter() - start)
+    return 1e3 * statistics.median(times)
+
+
+def panda_available() -> bool:
+    try:
+        import panda_gym  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--episodes", type=int, default=100)
+    parser.add_argument("--steps", type=int, default=1000)
+    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--only", choices=["success", "speed", "render"])
+    args = parser.parse_args()
+
+    if args.only in (None, "success"):
+        print(f"\nScripted policies, {args.episodes} seeded episodes each\n")
+        print("| task | success rate | mean return | s per episode |")
+        print("|---|---|---|---|")
+        for env_id in TASKS:
+            rate, mean_return, seconds = scripted_success(env_id, args.episodes)
+            print(f"| {env_id} | {rate:.0%} | {mean_return:.1f} | {seconds:.3f} |", flush=True)
+
+    if args.only in (None, "speed"):
+        print(f"\nEnv steps per second, gym.make, one process, random actions "
+              f"(median of {args.repeats} x {args.steps} steps)\n")
+        panda = steps_per_second(PANDA_PUSH, args.steps, args.repeats) if panda_available() \
+            else None
+        print(f"| env | steps/s | vs {PANDA_PUSH} |")
+        print("|---|---|---|")
+        for env_id in TASKS:
+            rate = steps_per_second(env_id, args.steps, args.repeats)
+            ratio = f"{rate / panda:.2f}x" if panda else "not installed"
+            print(f"| {env_id} | {rate:,.0f} | {ratio} |", flush=True)
+        if panda:
+            print(f"| {PANDA_PUSH} (panda-gym, PyBullet) | {panda:,.0f} | 1.00x |")
+
+    if args.only in (None, "render"):
+        print("\nrgb_array frames, 480 x 480 (median of 20 after the first)\n")
+        print("| env | ms per frame |")
+        print("|---|---|")
+        for env_id in TASKS:
+            print(f"| {env_id} | {frame_milliseconds(env_id):.1f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
