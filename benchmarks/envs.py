@@ -7,7 +7,8 @@
    steps each after a warm-up; panda-gym's PandaPush-v3 timed the same way in the same run
    when it is installed (``pip install panda-gym``), and our rate as a ratio to it.
 3. ``render_mode="rgb_array"`` frame time (480 x 480), the median over 20 frames of an
-   episode, after the first (compiling) frame.
+   episode, after the first (compiling) frame; and a picture of every task at the start and
+   at the end of a scripted episode (seed 1), written to ``--frames`` (default docs/images).
 
     python benchmarks/envs.py                    # all three tables, about 3 minutes on 2 cores
     python benchmarks/envs.py --only speed       # one table: success, speed or render
@@ -16,6 +17,7 @@
 import argparse
 import statistics
 import time
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -83,6 +85,30 @@ def frame_milliseconds(env_id: str, frames: int = 20) -> float:
     return 1e3 * statistics.median(times)
 
 
+def scripted_frames(env_id: str, seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """rgb_array frames at the start and at the end of a scripted episode."""
+    env = gym.make(env_id, render_mode="rgb_array")
+    policy = scripted_policy(env)
+    obs, _ = env.reset(seed=seed)
+    start = env.render()
+    done = False
+    while not done:
+        obs, _, terminated, truncated, _ = env.step(policy(obs))
+        done = terminated or truncated
+    return start, env.render()
+
+
+def save_task_picture(path: Path) -> None:
+    """One PNG: a column per task, its start above its end."""
+    import matplotlib.pyplot as plt
+
+    columns = [np.concatenate(scripted_frames(env_id), axis=0) for env_id in TASKS]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    plt.imsave(path, np.concatenate(columns, axis=1))
+    print(f"\nwrote {path}: {', '.join(TASKS)} left to right; start above, end of a "
+          "scripted episode (seed 1) below")
+
+
 def panda_available() -> bool:
     try:
         import panda_gym  # noqa: F401
@@ -97,6 +123,8 @@ def main():
     parser.add_argument("--steps", type=int, default=1000)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--only", choices=["success", "speed", "render"])
+    parser.add_argument("--frames", type=Path, default=Path("docs/images"),
+                        help="folder for the task picture (tasks.png)")
     args = parser.parse_args()
 
     if args.only in (None, "success"):
@@ -127,6 +155,7 @@ def main():
         print("|---|---|")
         for env_id in TASKS:
             print(f"| {env_id} | {frame_milliseconds(env_id):.1f} |", flush=True)
+        save_task_picture(args.frames / "tasks.png")
 
 
 if __name__ == "__main__":

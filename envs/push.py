@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from rigid_gym.envs.base import MARKER_ALPHA, DISTANCE_THRESHOLD, RigidGymEnv, sample_apart
-from rigid_gym.shapes import Sphere
+from rigid_gym.meshes import prism_mesh
 
 OBJECT_RANGE = 0.15
 """m: the cube starts at x, y uniform in [-0.15, 0.15] (panda-gym's and Fetch's range)."""
@@ -80,4 +80,8 @@ class PushEnv(RigidGymEnv):
         return np.linalg.norm(achieved_goal - desired_goal, axis=-1) < DISTANCE_THRESHOLD
 
     def _add_markers(self, renderer):
-        renderer.add_marker(Sphere(self.cube_half[0]), self.goal, (0.2, 0.8, 0.3), MARKER_ALPHA)
+        # the success zone: a thin disc of the threshold's radius on the table
+        angles = np.linspace(0.0, 2.0 * np.pi, 48, endpoint=False)
+        circle = DISTANCE_THRESHOLD * np.column_stack([np.cos(angles), np.sin(angles)])
+        zone = prism_mesh(circle, 0.0005, 0.002)
+        renderer.add_marker(zone, (self.goal[0], self.goal[1], 0.0), (0.2, 0.8, 0.3), MARKER_ALPHA)

@@ -91,7 +91,7 @@ class ThrowEnv(RigidGymEnv):
     num_cubes = 1
     has_grip = True
     goal_size = 3
-    camera_view = ((0.25, -0.9, 0.5), (0.28, 0.0, 0.04), 36.0)
+    camera_view = ((0.2, -0.8, 0.8), (0.26, 0.0, 0.02), 42.0)
 
     def _place_cubes(self, half):
         xy = self.np_random.uniform(-OBJECT_RANGE, OBJECT_RANGE, size=2)
