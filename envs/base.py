@@ -12,6 +12,9 @@ Conventions (those of panda-gym and Gymnasium-Robotics Fetch, so their HER setti
 
 from __future__ import annotations
 
+import os
+import sys
+
 import numpy as np
 import gymnasium as gym
 from gymnasium import spaces
@@ -75,6 +78,11 @@ class RigidGymEnv(gym.Env):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"{type(self).__name__}: render_mode must be None or one of "
                              f"{self.metadata['render_modes']}, got {render_mode!r}")
+        if render_mode == "human" and not _display_available():
+            raise ValueError(f"{type(self).__name__}: render_mode='human' opens the rerun viewer "
+                             "and needs a display (none found: DISPLAY and WAYLAND_DISPLAY are "
+                             "unset); use render_mode='rgb_array', or record episodes with "
+                             "rigid_gym.recording and replay them where a display exists")
         if reward_type not in ("sparse", "dense"):
             raise ValueError(f"{type(self).__name__}: reward_type must be 'sparse' or 'dense', "
                              f"got {reward_type!r}")
@@ -272,6 +280,12 @@ def _randomization_ranges(randomize, where: str) -> dict:
                              f"<= {ceiling}, got {value!r}")
         ranges[name] = (low, high)
     return ranges
+
+
+def _display_available() -> bool:
+    """Whether a window can open: always off Linux; on Linux, when X11 or Wayland is set."""
+    return not sys.platform.startswith("linux") or bool(
+        os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
 def _show_in_viewer(frame: np.ndarray) -> None:

@@ -284,6 +284,14 @@ def test_rgb_array_frames_show_the_task_and_are_reproducible(env_id):
     assert len(np.unique(frame.reshape(-1, 3), axis=0)) > 50  # shaded, not flat
 
 
+def test_human_mode_without_a_display_fails_at_construction(monkeypatch):
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setattr("sys.platform", "linux")
+    with pytest.raises(ValueError, match="needs a display"):
+        gym.make("rigid_gym/Push-v0", render_mode="human")
+
+
 def test_render_needs_a_mode_and_a_reset():
     env = make("rigid_gym/Push-v0", render_mode="rgb_array")
     with pytest.raises(ResetNeeded):
