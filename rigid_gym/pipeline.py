@@ -39,8 +39,9 @@ def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
     """Advance every world of ``world`` (a :class:`rigid_gym.World`) by ``dt`` seconds."""
     s, m, geo, pairs = world.state, world.model, world.geometry, world.collider
     # light kernels run serially for a single world (waking the thread pool costs more than
-    # their work); the solver phases stay parallel: their serial twins measured 2.5-3.5x
-    # slower, a numba code-generation difference not yet understood (docs/architecture.md)
+    # their work); the solver phases keep their parallel code (their serial twins measured
+    # 2.5-3.5x slower, a numba code-generation difference not yet understood), which World.step
+    # runs on the calling thread alone for a single world (docs/architecture.md)
     k = lambda compiled: for_worlds(compiled, world.num_worlds)  # noqa: E731
     gravity = float(np.linalg.norm(m.gravity))
     on = config.phases(gravity > 0.0)

@@ -23,7 +23,7 @@ from rigid_gym import quaternion as quat
 from rigid_gym.config import SolverConfig
 from rigid_gym.kernels import integrate
 from rigid_gym.kernels.integrate import DYNAMIC, STATIC
-from rigid_gym.kernels.jit import for_worlds
+from rigid_gym.kernels.jit import calling_thread_only, for_worlds
 from rigid_gym.scene import Scene
 
 
@@ -112,11 +112,12 @@ class World:
         ``apply_force``/``apply_torque`` act during the next step only."""
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
             raise ValueError(f"World.step: n must be an int >= 0, got {n!r}")
-        for _ in range(int(n)):
-            pipeline.step(self, self.config, self.dt, self._profile)
-            self.state.force.fill(0.0)
-            self.state.torque.fill(0.0)
-            self.steps += 1
+        with calling_thread_only(self.num_worlds == 1):
+            for _ in range(int(n)):
+                pipeline.step(self, self.config, self.dt, self._profile)
+                self.state.force.fill(0.0)
+                self.state.torque.fill(0.0)
+                self.steps += 1
 
     def reset(self) -> None:
         """Put every world back to the scene's initial state (time 0)."""
