@@ -113,9 +113,13 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     if checkpoint_freq:
         callbacks.append(CheckpointCallback(checkpoint_freq // n_envs or 1,
                                             str(folder / "checkpoints"), name_prefix="model"))
+    start = time.perf_counter()
     model.learn(timesteps, callback=CallbackList(callbacks), progress_bar=progress_bar)
     model.save(folder / "model.zip")
     env.close()
+    record = json.loads((folder / "run.json").read_text())
+    record["wall_seconds"] = round(time.perf_counter() - start, 1)  # training and evaluations
+    (folder / "run.json").write_text(json.dumps(record, indent=2))
     return folder
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from rigid_gym.envs.base import MARKER_ALPHA, DISTANCE_THRESHOLD, RigidGymEnv, sample_apart
@@ -80,8 +82,13 @@ class PushEnv(RigidGymEnv):
         return np.linalg.norm(achieved_goal - desired_goal, axis=-1) < DISTANCE_THRESHOLD
 
     def _add_markers(self, renderer):
-        # the success zone: a thin disc of the threshold's radius on the table
-        angles = np.linspace(0.0, 2.0 * np.pi, 48, endpoint=False)
-        circle = DISTANCE_THRESHOLD * np.column_stack([np.cos(angles), np.sin(angles)])
-        zone = prism_mesh(circle, 0.0005, 0.002)
-        renderer.add_marker(zone, (self.goal[0], self.goal[1], 0.0), (0.2, 0.8, 0.3), MARKER_ALPHA)
+        renderer.add_marker(success_zone(), (self.goal[0], self.goal[1], 0.0), (0.2, 0.8, 0.3),
+                            MARKER_ALPHA)
+
+
+@functools.cache
+def success_zone():
+    """The goal marker: a thin disc (a 48-gon prism, 2 mm high) of the threshold's radius."""
+    angles = np.linspace(0.0, 2.0 * np.pi, 48, endpoint=False)
+    circle = DISTANCE_THRESHOLD * np.column_stack([np.cos(angles), np.sin(angles)])
+    return prism_mesh(circle, 0.0005, 0.002)

@@ -1,16 +1,29 @@
 """The ``rigid-gym`` command.
 
     rigid-gym demo [--steps N] [--dt S] [--order {1,2,3}]
+    rigid-gym record ENV_ID [--policy random|scripted|MODEL.zip] [--algo NAME] [--episodes N]
+                     [--seed S] [--out DIR] [--run NAME] [--contacts]
+    rigid-gym replay FILE [FILE ...]
 
 ``demo`` runs a few scenes (tumbling bodies of every shape, a ten-cube tower, a bouncing ball,
-a sliding box) and prints each result next to its closed form.
+a sliding box) and prints each result next to its closed form. ``record`` writes episodes of
+an env to ``.rrd`` files (``rigid_gym.recording``) and ``replay`` opens them in the rerun
+viewer installed with rerun-sdk.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
+import json
+import os
+import shutil
+import subprocess
 import sys
+import sysconfig
 import time
+import zipfile
+from pathlib import Path
 
 import numpy as np
 
@@ -84,6 +97,136 @@ def demo(steps: int, dt: float, order: int) -> int:
     return 0
 
 
+def record(env_id: str, policy: str, algo: str | None, episodes: int, seed: int, out: str,
+           run: str | None, contacts: bool) -> int:
+    """Record ``episodes`` episodes of ``env_id`` driven by ``policy``; print each file."""
+    import gymnasium as gym
+    from rigid_gym.recording import RecordRerun
+
+    env = RecordRerun(gym.make(env_id), out, episode_trigger=lambda k: True,
+                      run=run or f"{policy_name(policy)}-seed{seed}", contacts=contacts)
+    act = make_policy(env, policy, algo, seed)
+    print(f"recording {episodes} episode(s) of {env_id}, policy {policy}, seed {seed}")
+    try:
+        for episode in range(episodes):
+            observation, _ = env.reset(seed=seed if episode == 0 else None)
+            steps, total, done, info = 0, 0.0, False, {}
+            while not done:
+                observation, reward, terminated, truncated, info = env.step(act(observation))
+                steps, total, done = steps + 1, total + float(reward), terminated or truncated
+            written = f"{env.paths[-1]} ({env.paths[-1].stat().st_size / 1024:.0f} KiB)" \
+                if len(env.paths) > episode else "not written (RERUN=off)"
+            print(f"  episode {episode}: {steps} steps, return {total:.2f}, success "
+                  f"{bool(info.get('is_success'))}: {written}")
+    finally:
+        env.close()
+    return 0
+
+
+def policy_name(policy: str) -> str:
+    """The run-name part of a --policy value: random, scripted or the model file's stem."""
+    return Path(policy).stem if policy.endswith(".zip") else policy
+
+
+def make_policy(env, policy: str, algo: str | None, seed: int):
+    """observation -> action for ``env``: random (the action space sampled, seeded with
+    ``seed``), scripted (``rigid_gym.envs.scripted``) or a stable-baselines3 model .zip."""
+    if policy == "random":
+        env.action_space.seed(seed)
+        return lambda observation: env.action_space.sample()
+    if policy == "scripted":
+        from rigid_gym.envs.scripted import scripted_policy
+
+        return scripted_policy(env)
+    model = load_model(policy, algo, env)
+    return lambda observation: model.predict(observation, deterministic=True)[0]
+
+
+SB3_PACKAGES = ("stable_baselines3", "sb3_contrib")
+"""Where algorithm classes (SAC, TQC, ...) are looked up."""
+
+
+def load_model(path: str, algo: str | None, env):
+    """Load a stable-baselines3 model; its algorithm is ``algo`` (a class name such as SAC or
+    TQC) or read from the policy class recorded in the zip. ``env`` is passed on (HER needs
+    it)."""
+    if not Path(path).is_file():
+        raise ValueError(f"--policy: expected random, scripted or a model .zip, got {path!r} "
+                         "(no such file)")
+    name = algo or algorithm_of(path)
+    for package in SB3_PACKAGES:
+        try:
+            module = importlib.import_module(package)
+        except ImportError:
+            continue
+        found = [attr for attr in dir(module) if attr.lower() == name.lower()]
+        if found:
+            try:
+                return getattr(module, found[0]).load(path, env=env, device="cpu")
+            except ValueError as exc:  # spaces that differ from the env's
+                raise ValueError(f"--policy: {path} does not fit {env.env_id}: {exc}") from None
+    raise ValueError(f"--algo: no algorithm {name!r} in {' or '.join(SB3_PACKAGES)} (pip install "
+                     "stable-baselines3 sb3-contrib); pass a class name such as SAC or TQC")
+
+
+def algorithm_of(path: str) -> str:
+    """The algorithm of a stable-baselines3 zip, from its policy class's module
+    (``stable_baselines3.sac.policies`` -> ``sac``); PPO and A2C share
+    ``stable_baselines3.common.policies`` and only PPO saves a ``clip_range``."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            data = json.loads(archive.read("data"))
+        module = data["policy_class"]["__module__"].split(".")
+        if module[1] == "common":
+            return "PPO" if "clip_range" in data else "A2C"
+        return module[1]
+    except (zipfile.BadZipFile, KeyError, ValueError, IndexError) as exc:
+        raise ValueError(f"--policy: {path} is not a stable-baselines3 model zip whose "
+                         f"algorithm can be read ({exc}); pass --algo") from None
+
+
+def replay(files: list[str]) -> int:
+    """Open ``files`` in the rerun viewer; returns its exit status."""
+    missing = [f for f in files if not Path(f).is_file()]
+    if missing:
+        print(f"rigid-gym replay: no such file: {', '.join(missing)}", file=sys.stderr)
+        return 2
+    viewer = find_rerun()
+    if viewer is None:
+        print(f"rigid-gym replay: the rerun viewer was not found next to {sys.executable} or on "
+              "PATH; it comes with pip install 'rerun-sdk==0.41.*'", file=sys.stderr)
+        return 1
+    return subprocess.call([viewer, *files])
+
+
+def find_rerun() -> str | None:
+    """The ``rerun`` executable installed with this Python's rerun-sdk (its scripts folder,
+    then the interpreter's folder), else the first on PATH, else None."""
+    name = "rerun.exe" if os.name == "nt" else "rerun"
+    for folder in (sysconfig.get_path("scripts"), os.path.dirname(sys.executable)):
+        candidate = os.path.join(folder, name)
+        if os.path.isfile(candidate) and os.access(candidate, os.X_OK):
+            return candidate
+    return shutil.which("rerun")
+
+
+def env_id(text: str) -> str:
+    """An argparse type: a registered rigid_gym env id."""
+    import rigid_gym
+
+    if text not in rigid_gym.ENV_IDS:
+        raise argparse.ArgumentTypeError(f"unknown env id {text!r}; choose from "
+                                         f"{', '.join(rigid_gym.ENV_IDS)}")
+    return text
+
+
+def policy_spec(text: str) -> str:
+    """An argparse type: random, scripted or a path ending in .zip."""
+    if text in ("random", "scripted") or text.endswith(".zip"):
+        return text
+    raise argparse.ArgumentTypeError(f"expected random, scripted or a model .zip, got {text!r}")
+
+
 def bounded(kind, low, high):
     """An argparse type: ``kind`` (int or float) within [low, high], else a clear error."""
 
@@ -108,10 +251,36 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--dt", type=bounded(float, 1e-6, 0.1), default=1 / 240,
                    help="time step, s, 1e-6 to 0.1 (default 1/240)")
     p.add_argument("--order", type=int, default=2, choices=(1, 2, 3), help="rotation order")
+    p = commands.add_parser("record", help="record episodes of an env to .rrd files")
+    p.add_argument("env_id", type=env_id, help="e.g. rigid_gym/Push-v0")
+    p.add_argument("--policy", type=policy_spec, default="scripted",
+                   help="random, scripted (default) or a stable-baselines3 model .zip")
+    p.add_argument("--algo", default=None,
+                   help="the model's algorithm class (SAC, TQC, PPO, ...); default: read "
+                        "from the zip")
+    p.add_argument("--episodes", type=bounded(int, 1, 10**4), default=1,
+                   help="number of episodes, 1 to 1e4 (default 1)")
+    p.add_argument("--seed", type=bounded(int, 0, 2**32 - 1), default=0,
+                   help="seed of the first reset (and of random actions), 0 to 2^32-1")
+    p.add_argument("--out", default="recordings",
+                   help="output folder (default recordings); files go to "
+                        "OUT/<env id>/<run>-episode-<k>.rrd")
+    p.add_argument("--run", default=None,
+                   help="run name in the file names (default <policy>-seed<seed>)")
+    p.add_argument("--contacts", action="store_true",
+                   help="also record contact points and force arrows")
+    p = commands.add_parser("replay", help="open .rrd recordings in the rerun viewer")
+    p.add_argument("files", nargs="+", metavar="FILE", help=".rrd file(s)")
     args = parser.parse_args(argv)
     if args.command == "demo":
         return demo(args.steps, args.dt, args.order)
-    return 2
+    if args.command == "replay":
+        return replay(args.files)
+    try:
+        return record(args.env_id, args.policy, args.algo, args.episodes, args.seed, args.out,
+                      args.run, args.contacts)
+    except ValueError as exc:
+        parser.error(str(exc))
 
 
 if __name__ == "__main__":

@@ -22,3 +22,106 @@ def test_bad_arguments_fail_with_the_allowed_range(args, message, capsys):
         main(args)
     assert exit_info.value.code == 2
     assert message in capsys.readouterr().err
+
+
+# -- record and replay ----------------------------------------------------------------------------
+
+def test_record_writes_one_readable_file_per_episode(tmp_path, capsys):
+    from rerun.chunk import RrdReader
+
+    args = ["record", "rigid_gym/Throw-v0", "--policy", "random", "--episodes", "2",
+            "--seed", "1", "--out", str(tmp_path)]
+    assert main(args) == 0
+    folder = tmp_path / "rigid_gym-Throw-v0"
+    assert sorted(p.name for p in folder.iterdir()) == [
+        "random-seed1-episode-0.rrd", "random-seed1-episode-1.rrd"]
+    for path in folder.iterdir():
+        (recording,) = RrdReader(path).recordings()
+        assert recording.application_id == "rigid_gym-Throw-v0"
+    out = capsys.readouterr().out
+    assert "episode 0: 50 steps" in out and "episode 1: 50 steps" in out
+
+
+def test_record_the_scripted_policy(tmp_path, capsys):
+    assert main(["record", "rigid_gym/Throw-v0", "--out", str(tmp_path), "--run", "demo",
+                 "--contacts"]) == 0
+    path = tmp_path / "rigid_gym-Throw-v0" / "demo-episode-0.rrd"
+    assert path.stat().st_size < 2 * 1024 ** 2
+    assert "success True" in capsys.readouterr().out
+
+
+def sb3_model(algorithm: str):
+    """An untrained model for Throw: PPO, or SAC with HER (whose loading needs the env)."""
+    import gymnasium as gym
+    from stable_baselines3 import PPO, SAC, HerReplayBuffer
+
+    env = gym.make("rigid_gym/Throw-v0")
+    if algorithm == "ppo":
+        return PPO("MultiInputPolicy", env, n_steps=8, batch_size=8, device="cpu")
+    return SAC("MultiInputPolicy", env, replay_buffer_class=HerReplayBuffer, buffer_size=1000,
+               device="cpu")
+
+
+@pytest.mark.parametrize("algorithm", ["ppo", "sac"])
+def test_record_a_stable_baselines3_model_reads_its_algorithm_from_the_zip(algorithm, tmp_path,
+                                                                           capsys):
+    model = tmp_path / f"{algorithm}_throw.zip"
+    sb3_model(algorithm).save(model)
+    assert main(["record", "rigid_gym/Throw-v0", "--policy", str(model), "--out",
+                 str(tmp_path)]) == 0
+    assert (tmp_path / "rigid_gym-Throw-v0" / f"{algorithm}_throw-seed0-episode-0.rrd").is_file()
+    with pytest.raises(SystemExit):
+        main(["record", "rigid_gym/Push-v0", "--policy", str(model), "--out", str(tmp_path)])
+    assert "does not fit rigid_gym/Push-v0" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args, message", [
+    (["record", "Nope-v0"], "unknown env id 'Nope-v0'; choose from rigid_gym/Push-v0"),
+    (["record", "rigid_gym/Push-v0", "--policy", "greedy"],
+     "expected random, scripted or a model .zip, got 'greedy'"),
+    (["record", "rigid_gym/Push-v0", "--episodes", "0"], "must be in [1, 10000], got 0"),
+    (["record", "rigid_gym/Push-v0", "--policy", "missing.zip"], "'missing.zip' (no such file)"),
+    (["record", "rigid_gym/Push-v0", "--run", "a/b"], "RecordRerun.run: must be a non-empty"),
+])
+def test_bad_record_arguments_fail_clearly(args, message, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(args)
+    assert exit_info.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_replay_runs_the_viewer_installed_with_this_python(tmp_path, monkeypatch):
+    import os
+    import subprocess
+    import sys
+    import sysconfig
+
+    import rerun
+
+    from rigid_gym import cli
+
+    viewer = cli.find_rerun()
+    assert os.path.dirname(viewer) in (sysconfig.get_path("scripts"),
+                                       os.path.dirname(sys.executable))
+    version = subprocess.run([viewer, "--version"], capture_output=True, text=True).stdout
+    assert f"rerun-cli {rerun.__version__}" in version
+    # a stand-in viewer that writes down its arguments
+    fake, log = tmp_path / "rerun", tmp_path / "args.txt"
+    fake.write_text(f"#!/bin/sh\necho \"$@\" > {log}\n")
+    fake.chmod(0o755)
+    monkeypatch.setattr(cli, "find_rerun", lambda: str(fake))
+    episode = tmp_path / "episode.rrd"
+    episode.write_bytes(b"")
+    assert main(["replay", str(episode)]) == 0
+    assert log.read_text().split() == [str(episode)]
+
+
+def test_replay_explains_a_missing_file_or_viewer(tmp_path, monkeypatch, capsys):
+    from rigid_gym import cli
+
+    assert main(["replay", str(tmp_path / "nope.rrd")]) == 2
+    assert "no such file" in capsys.readouterr().err
+    monkeypatch.setattr(cli, "find_rerun", lambda: None)
+    (tmp_path / "a.rrd").write_bytes(b"")
+    assert main(["replay", str(tmp_path / "a.rrd")]) == 1
+    assert "rerun viewer was not found" in capsys.readouterr().err

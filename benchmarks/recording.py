@@ -1,0 +1,137 @@
+"""What recording episodes with rerun costs: env steps/s with and without ``RecordRerun``.
+
+For each task (through ``gym.make``, scripted policy, episodes of 50 steps, every episode
+recorded: the worst case; training records a few), ``--repeats`` rounds each time
+``--episodes`` seeded episodes bare and the same episodes recorded, in alternating order so
+that load from other processes hits both alike. Reported: the median steps/s of each, the
+overhead (bare / recorded - 1), the recorder's own time per episode measured directly (all
+time in the wrapper that is not spent in the env: geometry at reset, buffering, sending the
+columns and closing the file at the episode's end) and its share of a recorded episode's
+time, the share it would have under the default trigger (``cubic_schedule``: 10 of the first
+1000 episodes recorded; derived from the measured time, not timed), and the size of a
+50-step episode's file, without and with contacts. On a loaded machine the steps/s ratio is
+noisier than the recorder's own time.
+
+    python benchmarks/recording.py                  # about a minute on 2 cores
+    python benchmarks/recording.py --repeats 9 --episodes 4
+"""
+
+import argparse
+import statistics
+import tempfile
+import time
+from pathlib import Path
+
+import gymnasium as gym
+
+import rigid_gym  # noqa: F401  (registers the ids)
+from rigid_gym.envs.scripted import scripted_policy
+from rigid_gym.recording import RecordRerun, cubic_schedule
+
+TASKS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
+STEPS = 50
+"""Env steps per episode (Stack's own limit is 100; 50 keeps the tasks comparable)."""
+DEFAULT_FRACTION = sum(map(cubic_schedule, range(1000))) / 1000
+"""Share of the first 1000 episodes that the default trigger records (0.01)."""
+
+
+class EnvTime(gym.Wrapper):
+    """Accumulates the wall time (s) spent in the wrapped env's reset and step."""
+
+    def __init__(self, env):
+        super().__init__(env)
+        self.seconds = 0.0
+
+    def _timed(self, call, *args, **kwargs):
+        start = time.perf_counter()
+        try:
+            return call(*args, **kwargs)
+        finally:
+            self.seconds += time.perf_counter() - start
+
+    def reset(self, **kwargs):
+        return self._timed(self.env.reset, **kwargs)
+
+    def step(self, action):
+        return self._timed(self.env.step, action)
+
+
+def make(env_id: str, folder: Path | None, contacts: bool = False):
+    """(outer, inner): EnvTime wrappers around the recorder and around the env (the same
+    one when ``folder`` is None: not recorded)."""
+    inner = EnvTime(gym.make(env_id, max_episode_steps=STEPS))
+    if folder is None:
+        return inner, inner
+    return EnvTime(RecordRerun(inner, folder, episode_trigger=lambda k: True, run="bench",
+                               contacts=contacts)), inner
+
+
+def run_episodes(env, seeds) -> tuple[int, float]:
+    """(steps, wall seconds) of the scripted policy's episodes, one per seed, files closed."""
+    policy = scripted_policy(env)
+    steps = 0
+    start = time.perf_counter()
+    for seed in seeds:
+        observation, _ = env.reset(seed=seed)
+        done = False
+        while not done:
+            observation, _, terminated, truncated, _ = env.step(policy(observation))
+            steps, done = steps + 1, terminated or truncated
+    env.close()
+    return steps, time.perf_counter() - start
+
+
+def measure(env_id: str, repeats: int, episodes: int, folder: Path) -> dict:
+    """Median steps/s bare and recorded, the recorder's median ms per episode, file sizes."""
+    bare_rates, recorded_rates, recorder_ms = [], [], []
+    seeds = range(episodes)
+    run_episodes(make(env_id, None)[0], [0])  # warm-up: numba caches, first allocations
+    for repeat in range(repeats):
+        order = ("bare", "recorded") if repeat % 2 == 0 else ("recorded", "bare")
+        for kind in order:
+            env, inner = make(env_id, folder if kind == "recorded" else None)
+            steps, seconds = run_episodes(env, seeds)
+            if kind == "bare":
+                bare_rates.append(steps / seconds)
+            else:
+                recorded_rates.append(steps / seconds)
+                recorder_ms.append(1e3 * (env.seconds - inner.seconds) / episodes)
+    sizes = {}
+    for contacts in (False, True):
+        env, _ = make(env_id, folder / f"contacts-{contacts}", contacts)
+        run_episodes(env, [0])
+        sizes[contacts] = env.env.paths[0].stat().st_size / 1024
+    bare, recorded = statistics.median(bare_rates), statistics.median(recorded_rates)
+    return {"bare": bare, "recorded": recorded, "overhead": bare / recorded - 1.0,
+            "recorder_ms": statistics.median(recorder_ms),
+            "episode_ms": 1e3 * STEPS / recorded, "kib": sizes[False],
+            "kib_contacts": sizes[True]}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--repeats", type=int, default=5, help="rounds per task (default 5)")
+    parser.add_argument("--episodes", type=int, default=2,
+                        help="episodes per round and kind (default 2)")
+    args = parser.parse_args()
+    if args.repeats < 1 or args.episodes < 1:
+        parser.error(f"--repeats and --episodes must be >= 1, got {args.repeats}, "
+                     f"{args.episodes}")
+    print(f"{STEPS}-step scripted episodes, every one recorded; medians of {args.repeats} "
+          f"rounds of {args.episodes} episodes\n")
+    print("| task | steps/s bare | steps/s recorded | overhead | recorder, ms per episode "
+          "(share) | share, default trigger | file per episode | with contacts |")
+    print("|---|---|---|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as folder:
+        for env_id in TASKS:
+            r = measure(env_id, args.repeats, args.episodes, Path(folder))
+            share = r["recorder_ms"] / r["episode_ms"]
+            default = DEFAULT_FRACTION * r["recorder_ms"] / (1e3 * STEPS / r["bare"])
+            print(f"| {env_id.split('/')[1]} | {r['bare']:,.0f} | {r['recorded']:,.0f} | "
+                  f"{100 * r['overhead']:+.1f}% | {r['recorder_ms']:.1f} ({100 * share:.1f}%) | "
+                  f"{100 * default:.2f}% | {r['kib']:.0f} KiB | {r['kib_contacts']:.0f} KiB |",
+                  flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,363 @@
+"""Recordings: what the .rrd file holds equals what the env or World did, files are complete
+after an episode, an exception, close() and in SubprocVecEnv workers, and bad input fails."""
+
+import subprocess
+import sys
+import textwrap
+
+import gymnasium as gym
+import numpy as np
+import pyarrow as pa
+import pytest
+import rerun as rr
+from rerun.chunk import RrdReader
+
+import rigid_gym as rg
+from rigid_gym.kernels.integrate import STATIC
+from rigid_gym.cli import find_rerun
+from rigid_gym.envs.scripted import scripted_policy
+from rigid_gym.meshes import l_shape_mesh
+from rigid_gym.recording import RecordRerun, WorldRecorder
+
+TASK_IDS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
+
+
+@pytest.fixture(autouse=True)
+def strict_rerun(monkeypatch):
+    """Malformed data raises instead of being dropped with a warning (here and in the
+    processes the tests start)."""
+    monkeypatch.setenv("RERUN_STRICT", "1")
+    rr.set_strict_mode(True)
+    yield
+    rr.set_strict_mode(False)
+
+
+# -- reading files back ---------------------------------------------------------------------------
+
+def temporal(path, entity: str, component: str):
+    """(steps (T,) int64, values pa.Array with one entry per row) of a temporal component,
+    sorted by step (an entity may be split over several chunks)."""
+    steps, values = [], []
+    stream = RrdReader(path).stream().filter(content=entity, is_static=False, components=component)
+    for chunk in stream:
+        batch = chunk.to_record_batch()
+        if component in batch.schema.names:
+            steps.append(batch.column("step").to_numpy())
+            values.append(batch.column(component))
+    assert steps, f"{path} has no {component} at {entity}"
+    step = np.concatenate(steps)
+    order = np.argsort(step, kind="stable")
+    return step[order], pa.concat_arrays(values).take(pa.array(order))
+
+
+def rows(values: pa.Array, width: int) -> np.ndarray:
+    """A column of (nested) lists as a (T, width) array of its numbers."""
+    while pa.types.is_list(values.type) or pa.types.is_fixed_size_list(values.type):
+        values = values.flatten()
+    return values.to_numpy().reshape(-1, width)
+
+
+def static_rows(path) -> dict:
+    """{(entity, component): number of static rows holding it} over the whole file."""
+    counts = {}
+    for chunk in RrdReader(path).stream().filter(is_static=True):
+        batch = chunk.to_record_batch()
+        for name in batch.schema.names:
+            if ":" in name:
+                key = (chunk.entity_path, name)
+                counts[key] = counts.get(key, 0) + batch.num_rows
+    return counts
+
+
+def xyzw(orientation: np.ndarray) -> np.ndarray:
+    return np.asarray(orientation)[..., [1, 2, 3, 0]]
+
+
+# -- an env episode -------------------------------------------------------------------------------
+
+def run_episode(env, seed: int):
+    """Run the scripted policy to the episode's end; return per-step body poses
+    (T + 1, n, 3), (T + 1, n, 4), the sim times (T + 1,) s, actions (T, a), rewards (T,) and
+    successes (T,)."""
+    observation, _ = env.reset(seed=seed)
+    policy = scripted_policy(env)
+    world = env.unwrapped.world
+    positions, orientations, times = [world.position.copy()], [world.orientation.copy()], [0.0]
+    actions, rewards, successes = [], [], []
+    done = False
+    while not done:
+        action = policy(observation)
+        observation, reward, terminated, truncated, info = env.step(action)
+        done = terminated or truncated
+        positions.append(world.position.copy())
+        orientations.append(world.orientation.copy())
+        times.append(world.time)
+        actions.append(action)
+        rewards.append(reward)
+        successes.append(float(info["is_success"]))
+    return (np.array(positions), np.array(orientations), np.array(times), np.array(actions),
+            np.array(rewards), np.array(successes))
+
+
+@pytest.mark.parametrize("env_id", TASK_IDS)
+def test_the_file_holds_the_episode_exactly(env_id, tmp_path):
+    env = RecordRerun(gym.make(env_id), tmp_path, episode_trigger=lambda k: True, run="test",
+                      contacts=True)
+    positions, orientations, times, actions, rewards, successes = run_episode(env, seed=3)
+    steps = len(rewards)  # the whole episode: 50 env steps (Stack 100)
+    # recording (contacts included) does not change what the env does
+    bare = run_episode(gym.make(env_id), seed=3)
+    np.testing.assert_array_equal(bare[0], positions)
+    np.testing.assert_array_equal(bare[1], orientations)
+    task = env.unwrapped
+    path = tmp_path / env_id.replace("/", "-") / "test-episode-0.rrd"
+    assert env.paths == [path]
+
+    recordings = RrdReader(path).recordings()
+    assert [r.application_id for r in recordings] == [env_id.replace("/", "-")]
+    assert len(RrdReader(path).blueprints()) == 1
+    for body in task.scene.bodies:
+        entity = f"/world/bodies/{body.name}"
+        if body.motion == STATIC:  # logged once, with its pose
+            assert static_rows(path)[(entity, "Transform3D:translation")] == 1
+            continue
+        step, translation = temporal(path, entity, "Transform3D:translation")
+        _, quaternion = temporal(path, entity, "Transform3D:quaternion")
+        assert step.tolist() == list(range(steps + 1))
+        # rerun stores float32: the file equals the env's float64 values rounded to float32
+        np.testing.assert_array_equal(rows(translation, 3),
+                                      positions[:, body.index].astype(np.float32))
+        np.testing.assert_array_equal(rows(quaternion, 4),
+                                      xyzw(orientations[:, body.index]).astype(np.float32))
+    step, reward = temporal(path, "/reward", "Scalars:scalars")
+    assert step.tolist() == list(range(1, steps + 1))
+    np.testing.assert_array_equal(reward.flatten().to_numpy(), rewards)
+    _, action = temporal(path, "/action", "Scalars:scalars")
+    np.testing.assert_array_equal(rows(action, actions.shape[1]), actions)
+    _, success = temporal(path, "/success", "Scalars:scalars")
+    np.testing.assert_array_equal(success.flatten().to_numpy(), successes)
+    # sim_time is the World's time in ns
+    batch = next(iter(RrdReader(path).stream().filter(content="/reward", is_static=False)))
+    np.testing.assert_array_equal(batch.to_record_batch().column("sim_time").cast(pa.int64())
+                                  .to_numpy(),
+                                  np.round(times[1:] * 1e9).astype(np.int64))
+    # contacts: rows at every step; at reset the cubes rest on the table
+    step, points = temporal(path, "/world/contacts/points", "Points3D:positions")
+    assert step.tolist() == list(range(steps + 1))
+    assert len(points[0]) >= 4 * task.num_cubes
+    step, arrows = temporal(path, "/world/contacts/forces", "Arrows3D:vectors")
+    assert step.tolist() == list(range(steps + 1))
+    assert len(arrows[0]) == 0 and len(rows(arrows, 3)) > 0  # no solver step before step 1
+
+
+@pytest.mark.parametrize("env_id", TASK_IDS)
+def test_geometry_and_goals_are_stored_once(env_id, tmp_path):
+    env = RecordRerun(gym.make(env_id, max_episode_steps=3), tmp_path,
+                      episode_trigger=lambda k: True, run="test")
+    run_episode(env, seed=0)
+    (path,) = env.paths
+    counts = static_rows(path)
+    for body in env.unwrapped.scene.bodies:  # one row of geometry per body
+        entity = f"/world/bodies/{body.name}"
+        geometry = {k: n for k, n in counts.items()
+                    if k[0] == entity and not k[1].startswith("Transform3D")}
+        assert geometry and set(geometry.values()) == {1}, (body.name, geometry)
+    goals = {k for k in counts if k[0].startswith("/world/goals/")}
+    assert goals and all(counts[k] == 1 for k in goals)
+    assert counts[("/world", "ViewCoordinates:xyz")] == 1
+
+
+def test_an_exception_in_step_leaves_a_complete_file_with_the_steps_so_far(tmp_path):
+    env = RecordRerun(gym.make("rigid_gym/Push-v0"), tmp_path, episode_trigger=lambda k: True,
+                      run="crash")
+    env.reset(seed=0)
+    for _ in range(6):
+        env.step(env.action_space.sample())
+    with pytest.raises(ValueError, match="action must be finite"):
+        env.step(np.array([np.nan, 0.0, 0.0]))
+    step, _ = temporal(env.paths[0], "/world/bodies/cube0", "Transform3D:translation")
+    assert step.tolist() == list(range(7))
+    verify = subprocess.run([find_rerun(), "rrd", "verify", str(env.paths[0])],
+                            capture_output=True)
+    assert verify.returncode == 0, verify.stderr
+
+
+def test_a_process_that_dies_of_an_exception_leaves_a_complete_file(tmp_path):
+    script = textwrap.dedent(f"""
+        import gymnasium as gym
+        import rigid_gym
+        from rigid_gym.recording import RecordRerun
+        env = RecordRerun(gym.make("rigid_gym/Throw-v0"), {str(tmp_path)!r},
+                          episode_trigger=lambda k: True, run="died")
+        env.reset(seed=0)
+        for _ in range(5):
+            env.step(env.action_space.sample())
+        raise RuntimeError("the training loop crashed")
+    """)
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert "the training loop crashed" in result.stderr
+    path = tmp_path / "rigid_gym-Throw-v0" / "died-episode-0.rrd"
+    step, _ = temporal(path, "/world/bodies/cube0", "Transform3D:translation")
+    assert step.tolist() == list(range(6))
+
+
+def test_trigger_names_and_unfinished_episodes(tmp_path):
+    env = RecordRerun(gym.make("rigid_gym/Throw-v0", max_episode_steps=2), tmp_path,
+                      episode_trigger=lambda k: k % 2 == 0, run="r1")
+    for episode in range(3):
+        env.reset(seed=episode)
+        for _ in range(2):
+            env.step(env.action_space.sample())
+    env.reset()  # episode 3 (not recorded) ...
+    env.reset()  # ... and episode 4, left unfinished: close() completes it
+    env.step(env.action_space.sample())
+    env.close()
+    folder = tmp_path / "rigid_gym-Throw-v0"
+    assert sorted(p.name for p in folder.iterdir()) == [
+        "r1-episode-0.rrd", "r1-episode-2.rrd", "r1-episode-4.rrd"]
+    step, _ = temporal(folder / "r1-episode-4.rrd", "/world/bodies/gripper",
+                       "Transform3D:translation")
+    assert step.tolist() == [0, 1]
+
+
+def test_rerun_off_records_nothing_and_breaks_nothing(tmp_path, monkeypatch):
+    monkeypatch.setenv("RERUN", "off")
+    env = RecordRerun(gym.make("rigid_gym/Throw-v0", max_episode_steps=2), tmp_path,
+                      episode_trigger=lambda k: True)
+    run_episode(env, seed=0)
+    env.close()
+    with WorldRecorder(env.unwrapped.world, tmp_path / "world.rrd") as recorder:
+        recorder.record()
+    assert env.paths == [] and not any(tmp_path.rglob("*.rrd"))
+
+
+# -- a World --------------------------------------------------------------------------------------
+
+def every_shape_scene() -> rg.Scene:
+    scene = rg.Scene()
+    scene.add_ground(friction=0.5)
+    shapes = [rg.Box((0.1, 0.2, 0.05)), rg.Sphere(0.1), rg.Capsule(0.05, 0.2), l_shape_mesh(),
+              rg.Compound([(rg.Box((0.05, 0.05, 0.05)), rg.Pose((0.1, 0.0, 0.0))),
+                           (rg.Sphere(0.05), rg.Pose((-0.1, 0.0, 0.0)))])]
+    for k, shape in enumerate(shapes):
+        scene.add_body(shape, density=500.0, position=(0.5 * k, 0.0, 0.5),
+                       orientation=(np.cos(0.3), np.sin(0.3), 0.0, 0.0),
+                       angular_velocity=(1.0, 2.0, 3.0), name=type(shape).__name__.lower())
+    return scene
+
+
+def test_a_world_recording_holds_every_body_pose_and_shape(tmp_path):
+    world = rg.World(every_shape_scene(), dt=1 / 120, num_worlds=2)
+    world.set_velocity("sphere", velocity=(1.0, 0.0, 0.0), world=1)
+    path = tmp_path / "world.rrd"
+    positions, orientations = [], []
+    with WorldRecorder(world, path, world_index=1, contacts=True, chunk_steps=7) as recorder:
+        for _ in range(20):
+            recorder.record()
+            positions.append(world.position[1].copy())
+            orientations.append(world.orientation[1].copy())
+            world.step()
+    positions, orientations = np.array(positions), np.array(orientations)
+    for body in world.scene.bodies[1:]:
+        entity = f"/world/bodies/{body.name}"
+        step, translation = temporal(path, entity, "Transform3D:translation")
+        _, quaternion = temporal(path, entity, "Transform3D:quaternion")
+        assert step.tolist() == list(range(20))
+        np.testing.assert_array_equal(rows(translation, 3),
+                                      positions[:, body.index].astype(np.float32))
+        np.testing.assert_array_equal(rows(quaternion, 4),
+                                      xyzw(orientations[:, body.index]).astype(np.float32))
+    # 20 rows sent every 7 steps: in 3 chunks
+    chunks = RrdReader(path).stream().filter(content="/world/bodies/box", is_static=False)
+    assert len(list(chunks)) == 3
+    counts = static_rows(path)
+    for body, component in [("box", "Boxes3D:half_sizes"), ("sphere", "Ellipsoids3D:half_sizes"),
+                            ("capsule", "Capsules3D:lengths"), ("mesh", "Mesh3D:vertex_positions"),
+                            ("ground", "Mesh3D:vertex_positions"),
+                            ("compound", "Boxes3D:half_sizes"),
+                            ("compound", "Ellipsoids3D:half_sizes")]:
+        assert counts[(f"/world/bodies/{body}", component)] == 1
+    # geometry is in body-frame coordinates: the mesh's shape frame is offset from its body
+    # frame (centre of mass, principal axes) by body_from_shape
+    spec = world.scene.bodies[world.scene.index("mesh")]
+    (chunk,) = RrdReader(path).stream().filter(content="/world/bodies/mesh", is_static=True,
+                                                components="Mesh3D:vertex_positions")
+    vertices = rows(chunk.to_record_batch().column("Mesh3D:vertex_positions"), 3)
+    shape_vertices = spec.shape.vertices[spec.shape.triangles].reshape(-1, 3)
+    np.testing.assert_allclose(vertices, spec.body_from_shape.apply(shape_vertices), atol=1e-6)
+    assert np.linalg.norm(spec.body_from_shape.position) > 0.01
+    # the compound's parts are placed by their poses, in the body frame
+    spec = world.scene.bodies[world.scene.index("compound")]
+    (chunk,) = RrdReader(path).stream().filter(content="/world/bodies/compound", is_static=True,
+                                                components="Boxes3D:centers")
+    np.testing.assert_allclose(rows(chunk.to_record_batch().column("Boxes3D:centers"), 3)[0],
+                               spec.body_from_shape.apply([0.1, 0.0, 0.0]), atol=1e-6)
+
+
+def test_a_closed_world_recorder_refuses_more_rows(tmp_path):
+    world = rg.World(every_shape_scene(), dt=1 / 120)
+    recorder = WorldRecorder(world, tmp_path / "w.rrd")
+    recorder.record()
+    recorder.close()
+    recorder.close()  # idempotent
+    with pytest.raises(ValueError, match="is closed"):
+        recorder.record()
+
+
+# -- SubprocVecEnv workers ------------------------------------------------------------------------
+
+def make_recorded(rank: int, folder: str):
+    def make():
+        return RecordRerun(gym.make("rigid_gym/Throw-v0", max_episode_steps=4), folder,
+                           episode_trigger=lambda k: True, run=f"worker{rank}")
+    return make
+
+
+def test_subproc_vec_env_workers_write_complete_files(tmp_path):
+    """SB3's default start method (forkserver): streams are made in the workers."""
+    from stable_baselines3.common.vec_env import SubprocVecEnv
+
+    envs = SubprocVecEnv([make_recorded(rank, str(tmp_path)) for rank in range(2)])
+    envs.seed(0)
+    envs.reset()
+    for _ in range(10):  # 2 whole episodes per worker, and a third one under way
+        envs.step(np.stack([envs.action_space.sample() for _ in range(2)]))
+    envs.close()
+    folder = tmp_path / "rigid_gym-Throw-v0"
+    for rank in range(2):
+        for episode, length in [(0, 4), (1, 4), (2, 2)]:
+            step, _ = temporal(folder / f"worker{rank}-episode-{episode}.rrd",
+                               "/world/bodies/cube0", "Transform3D:translation")
+            assert step.tolist() == list(range(length + 1))
+
+
+# -- bad input ------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"run": "a/b"}, "RecordRerun.run: must be a non-empty name"),
+    ({"run": ""}, "RecordRerun.run: must be a non-empty name"),
+    ({"episode_trigger": 3}, "RecordRerun.episode_trigger: expected a function"),
+    ({"contacts": "yes"}, "RecordRerun.contacts: must be a bool"),
+    ({"force_scale": -1.0}, "RecordRerun.force_scale: must be a finite number of m per N > 0"),
+    ({"chunk_steps": 0}, "RecordRerun.chunk_steps: must be an int >= 1, got 0"),
+])
+def test_bad_wrapper_arguments_are_refused(kwargs, message, tmp_path):
+    with pytest.raises(ValueError, match=message.replace(".", r"\.").replace("(", r"\(")):
+        RecordRerun(gym.make("rigid_gym/Push-v0"), tmp_path, **kwargs)
+
+
+def test_only_rigid_gym_envs_and_worlds_can_be_recorded(tmp_path):
+    with pytest.raises(ValueError, match="RecordRerun.env: expected a rigid_gym env, got "
+                                         "CartPoleEnv"):
+        RecordRerun(gym.make("CartPole-v1"), tmp_path)
+    with pytest.raises(ValueError, match="WorldRecorder.world: expected a rigid_gym.World"):
+        WorldRecorder(every_shape_scene(), tmp_path / "w.rrd")
+    with pytest.raises(ValueError, match=r"world_index: must be an int in \[0, 0\], got 1"):
+        WorldRecorder(rg.World(every_shape_scene(), dt=0.01), tmp_path / "w.rrd", world_index=1)
+
+
+def test_by_default_episodes_0_1_8_27_and_so_on_are_recorded():
+    from rigid_gym.recording import cubic_schedule
+
+    assert [k for k in range(3001) if cubic_schedule(k)] == [
+        0, 1, 8, 27, 64, 125, 216, 343, 512, 729, 1000, 2000, 3000]
