@@ -4,25 +4,27 @@
     rigid-gym record ENV_ID [--policy random|scripted|MODEL.zip] [--algo NAME] [--episodes N]
                      [--seed S] [--out DIR] [--run NAME] [--contacts]
     rigid-gym replay FILE [FILE ...]
+    rigid-gym train ENV_ID [--algo sac|tqc|ppo] [--steps N] [--seed S] [--n-envs N] [--out DIR]
+                    [--eval-freq N] [--eval-episodes N] [--checkpoint-freq N] [--progress-bar]
+    rigid-gym evaluate MODEL [--env ENV_ID] [--episodes N] [--record DIR]
 
 ``demo`` runs a few scenes (tumbling bodies of every shape, a ten-cube tower, a bouncing ball,
 a sliding box) and prints each result next to its closed form. ``record`` writes episodes of
 an env to ``.rrd`` files (``rigid_gym.recording``) and ``replay`` opens them in the rerun
-viewer installed with rerun-sdk.
+viewer installed with rerun-sdk. ``train`` and ``evaluate`` run the stable-baselines3
+baselines (``rigid_gym.agents``): settings from ``agents/hyperparams.yml``, success rates over
+seeded episodes.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
-import json
 import os
 import shutil
 import subprocess
 import sys
 import sysconfig
 import time
-import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -138,51 +140,40 @@ def make_policy(env, policy: str, algo: str | None, seed: int):
         from rigid_gym.envs.scripted import scripted_policy
 
         return scripted_policy(env)
-    model = load_model(policy, algo, env)
+    from rigid_gym.agents.evaluate import load_model
+
+    model = load_model(policy, env, algo)
     return lambda observation: model.predict(observation, deterministic=True)[0]
 
 
-SB3_PACKAGES = ("stable_baselines3", "sb3_contrib")
-"""Where algorithm classes (SAC, TQC, ...) are looked up."""
+def train(args) -> int:
+    """Train a baseline; print where the run went and its final evaluation."""
+    from rigid_gym.agents.train import train as run_training
+
+    folder = run_training(args.env_id, algo=args.algo, timesteps=args.steps, seed=args.seed,
+                          n_envs=args.n_envs, out=args.out, eval_freq=args.eval_freq,
+                          eval_episodes=args.eval_episodes,
+                          checkpoint_freq=args.checkpoint_freq, progress_bar=args.progress_bar)
+    print(f"trained {args.env_id}: {folder / 'model.zip'}")
+    if args.eval_freq:
+        last = (folder / "evaluations.csv").read_text().strip().splitlines()[-1].split(",")
+        print(f"final evaluation ({args.eval_episodes} episodes): success rate "
+              f"{float(last[1]):.0%}, mean return {float(last[2]):.1f}")
+    return 0
 
 
-def load_model(path: str, algo: str | None, env):
-    """Load a stable-baselines3 model; its algorithm is ``algo`` (a class name such as SAC or
-    TQC) or read from the policy class recorded in the zip. ``env`` is passed on (HER needs
-    it)."""
-    if not Path(path).is_file():
-        raise ValueError(f"--policy: expected random, scripted or a model .zip, got {path!r} "
-                         "(no such file)")
-    name = algo or algorithm_of(path)
-    for package in SB3_PACKAGES:
-        try:
-            module = importlib.import_module(package)
-        except ImportError:
-            continue
-        found = [attr for attr in dir(module) if attr.lower() == name.lower()]
-        if found:
-            try:
-                return getattr(module, found[0]).load(path, env=env, device="cpu")
-            except ValueError as exc:  # spaces that differ from the env's
-                raise ValueError(f"--policy: {path} does not fit {env.env_id}: {exc}") from None
-    raise ValueError(f"--algo: no algorithm {name!r} in {' or '.join(SB3_PACKAGES)} (pip install "
-                     "stable-baselines3 sb3-contrib); pass a class name such as SAC or TQC")
+def evaluate(args) -> int:
+    """Evaluate a saved model; optionally record the episodes."""
+    from rigid_gym.agents.evaluate import evaluate as run_evaluation
 
-
-def algorithm_of(path: str) -> str:
-    """The algorithm of a stable-baselines3 zip, from its policy class's module
-    (``stable_baselines3.sac.policies`` -> ``sac``); PPO and A2C share
-    ``stable_baselines3.common.policies`` and only PPO saves a ``clip_range``."""
-    try:
-        with zipfile.ZipFile(path) as archive:
-            data = json.loads(archive.read("data"))
-        module = data["policy_class"]["__module__"].split(".")
-        if module[1] == "common":
-            return "PPO" if "clip_range" in data else "A2C"
-        return module[1]
-    except (zipfile.BadZipFile, KeyError, ValueError, IndexError) as exc:
-        raise ValueError(f"--policy: {path} is not a stable-baselines3 model zip whose "
-                         f"algorithm can be read ({exc}); pass --algo") from None
+    result = run_evaluation(args.model, args.env, args.episodes)
+    print(f"{result['env_id']}: success rate {result['success_rate']:.0%} over "
+          f"{result['episodes']} episodes, return {result['mean_return']:.1f} "
+          f"+- {result['std_return']:.1f}")
+    if args.record:
+        return record(result["env_id"], args.model, None, min(args.episodes, 3), 0, args.record,
+                      None, False)
+    return 0
 
 
 def replay(files: list[str]) -> int:
@@ -271,12 +262,39 @@ def main(argv: list[str] | None = None) -> int:
                    help="also record contact points and force arrows")
     p = commands.add_parser("replay", help="open .rrd recordings in the rerun viewer")
     p.add_argument("files", nargs="+", metavar="FILE", help=".rrd file(s)")
+    p = commands.add_parser("train", help="train a stable-baselines3 baseline on an env")
+    p.add_argument("env_id", type=env_id, help="e.g. rigid_gym/Push-v0")
+    p.add_argument("--algo", choices=("sac", "tqc", "ppo"), default=None,
+                   help="default: the env's entry in agents/hyperparams.yml")
+    p.add_argument("--steps", type=bounded(int, 1, 10**9), default=None,
+                   help="env steps, 1 to 1e9 (default: hyperparams.yml)")
+    p.add_argument("--seed", type=bounded(int, 0, 2**32 - 1), default=0)
+    p.add_argument("--n-envs", type=bounded(int, 1, 1024), default=None,
+                   help="envs stepped together, 1 to 1024 (default: hyperparams.yml)")
+    p.add_argument("--out", default="runs", help="runs folder (default runs)")
+    p.add_argument("--eval-freq", type=bounded(int, 0, 10**9), default=10_000,
+                   help="env steps between evaluations (0: none; default 10000)")
+    p.add_argument("--eval-episodes", type=bounded(int, 1, 10**4), default=20)
+    p.add_argument("--checkpoint-freq", type=bounded(int, 0, 10**9), default=0,
+                   help="env steps between checkpoints (0: none)")
+    p.add_argument("--progress-bar", action="store_true")
+    p = commands.add_parser("evaluate", help="success rate of a trained model")
+    p.add_argument("model", help="a model.zip written by rigid-gym train")
+    p.add_argument("--env", type=env_id, default=None,
+                   help="env id (default: from run.json beside the model)")
+    p.add_argument("--episodes", type=bounded(int, 1, 10**5), default=100)
+    p.add_argument("--record", metavar="DIR", default=None,
+                   help="also record up to 3 episodes to DIR")
     args = parser.parse_args(argv)
     if args.command == "demo":
         return demo(args.steps, args.dt, args.order)
     if args.command == "replay":
         return replay(args.files)
     try:
+        if args.command == "train":
+            return train(args)
+        if args.command == "evaluate":
+            return evaluate(args)
         return record(args.env_id, args.policy, args.algo, args.episodes, args.seed, args.out,
                       args.run, args.contacts)
     except ValueError as exc:

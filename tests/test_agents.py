@@ -29,7 +29,7 @@ def test_a_short_run_trains_saves_and_evaluates(env_id, tmp_path):
     assert all(0.0 <= float(r["success_rate"]) <= 1.0 for r in rows)
     result = evaluate(folder / "model.zip", episodes=1)
     assert result["env_id"] == env_id and result["episodes"] == 1
-    assert load_model(folder / "model.zip").num_timesteps == steps
+    assert load_model(folder / "model.zip", gym.make(env_id)).num_timesteps == steps
 
 
 def test_bad_arguments_are_refused(tmp_path):

@@ -80,7 +80,7 @@ def test_record_a_stable_baselines3_model_reads_its_algorithm_from_the_zip(algor
     (["record", "rigid_gym/Push-v0", "--policy", "greedy"],
      "expected random, scripted or a model .zip, got 'greedy'"),
     (["record", "rigid_gym/Push-v0", "--episodes", "0"], "must be in [1, 10000], got 0"),
-    (["record", "rigid_gym/Push-v0", "--policy", "missing.zip"], "'missing.zip' (no such file)"),
+    (["record", "rigid_gym/Push-v0", "--policy", "missing.zip"], "no model file at missing.zip"),
     (["record", "rigid_gym/Push-v0", "--run", "a/b"], "RecordRerun.run: must be a non-empty"),
 ])
 def test_bad_record_arguments_fail_clearly(args, message, capsys):
@@ -125,3 +125,23 @@ def test_replay_explains_a_missing_file_or_viewer(tmp_path, monkeypatch, capsys)
     (tmp_path / "a.rrd").write_bytes(b"")
     assert main(["replay", str(tmp_path / "a.rrd")]) == 1
     assert "rerun viewer was not found" in capsys.readouterr().err
+
+
+def test_train_then_evaluate(tmp_path, capsys):
+    assert main(["train", "rigid_gym/PushDense-v0", "--steps", "64", "--n-envs", "2",
+                 "--out", str(tmp_path), "--eval-freq", "64", "--eval-episodes", "1"]) == 0
+    model = tmp_path / "PushDense-v0" / "ppo-seed0" / "model.zip"
+    assert f"trained rigid_gym/PushDense-v0: {model}" in capsys.readouterr().out
+    assert main(["evaluate", str(model), "--episodes", "2"]) == 0
+    assert "rigid_gym/PushDense-v0: success rate" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("args, message", [
+    (["train", "rigid_gym/Push-v0", "--algo", "dqn"], "invalid choice: 'dqn'"),
+    (["train", "rigid_gym/Push-v0", "--steps", "0"], "must be in [1, 1000000000], got 0"),
+    (["evaluate", "missing.zip", "--env", "rigid_gym/Push-v0"], "no model file at missing.zip"),
+])
+def test_bad_train_and_evaluate_arguments_fail_clearly(args, message, capsys):
+    with pytest.raises(SystemExit):
+        main(args)
+    assert message in capsys.readouterr().err
