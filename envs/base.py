@@ -116,13 +116,15 @@ class RigidGymEnv(gym.Env):
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
-        rng = self.np_random
-        factors = {name: rng.uniform(low, high, size=self.num_cubes + 2)
+        n = self.num_cubes
+        # one factor per body and quantity: bodies are the cubes, then the gripper and the table
+        factors = {name: self.np_random.uniform(low, high, size=n + 2)
                    for name, (low, high) in self.randomization.items()}
-        half = CUBE_HALF * factors.get("size", np.ones(self.num_cubes))[:self.num_cubes]
-        friction = FRICTION * factors.get("friction", np.ones(self.num_cubes + 2))
-        restitution = factors.get("restitution", np.zeros(self.num_cubes))[:self.num_cubes]
-        mass = CUBE_MASS * factors.get("mass", np.ones(self.num_cubes))[:self.num_cubes]
+        factor = lambda name: factors.get(name, np.ones(n + 2))  # noqa: E731
+        half = CUBE_HALF * factor("size")[:n]
+        mass = CUBE_MASS * factor("mass")[:n]
+        friction = FRICTION * factor("friction")
+        restitution = factors.get("restitution", np.zeros(n + 2))[:n]
 
         scene = Scene()
         scene.add_ground(friction=friction[-1], name="table")

@@ -65,12 +65,13 @@ def _push(observation: dict) -> np.ndarray:
     standoff = np.sqrt(2) * CUBE_HALF + PAD_HALF_EXTENTS[0] * np.abs(direction).sum() + 0.005
     behind = cube - direction * standoff
     behind[2] = cube[2]
-    if np.linalg.norm(pad[:2] - behind[:2]) > 2 * ALIGNED or pad[2] > cube[2] + 0.01:
-        if pad[2] < 2 * cube[2] + PAD_HALF_HEIGHT + 0.01 and \
-                np.linalg.norm(pad[:2] - behind[:2]) > 2 * ALIGNED:
+    off_line = np.linalg.norm(pad[:2] - behind[:2]) > 2 * ALIGNED
+    if off_line:
+        if pad[2] < 2 * cube[2] + PAD_HALF_HEIGHT + 0.01:
             return _toward(pad, np.array([pad[0], pad[1], CRUISE_HEIGHT]))  # clear the cube
-        return _above(pad, behind, CRUISE_HEIGHT) if np.linalg.norm(
-            pad[:2] - behind[:2]) > 2 * ALIGNED else _toward(pad, behind)
+        return _above(pad, behind, CRUISE_HEIGHT)
+    if pad[2] > cube[2] + 0.01:
+        return _toward(pad, behind)  # descend behind the cube
     # push no faster than the cube can slide to a stop at the target: v^2 = 2 mu g d
     speed = 0.7 * np.sqrt(2.0 * FRICTION * G * distance)
     return _toward(pad, behind + direction * min(speed * STEP_TIME, STEP_DISTANCE))
