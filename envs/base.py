@@ -56,6 +56,16 @@ MARKER_ALPHA = 0.45
 """Opacity of goal markers in rendered frames."""
 
 
+ARGUMENTS_TABLE = """| argument | default | meaning |
+    |---|---|---|
+    | render_mode | None | "rgb_array" (480 x 480 frames, no display needed) or "human" (rerun viewer) |
+    | reward_type | "sparse" | "sparse" or "dense" (the ``Dense`` ids) |
+    | terminate_on_success | False | end the episode when the goal is reached |
+    | randomize | False | True, or a dict of ranges, to redraw cube mass, size, restitution and friction each reset (``rigid_gym.envs.base.RANDOMIZATION``) |
+    | observation_noise | 0.0 | standard deviation of Gaussian noise on ``observation`` |"""
+"""The constructor arguments every task shares, as its docstring's "Arguments" table."""
+
+
 class RigidGymEnv(gym.Env):
     """Base of every task; see a task's docstring (PushEnv, StackEnv, ThrowEnv) for its tables.
 
@@ -63,6 +73,11 @@ class RigidGymEnv(gym.Env):
     ``_place_cubes``, ``_add_fixtures``, ``_sample_goal``, ``_achieved_goal`` and
     ``goal_reached``.
     """
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if cls.__doc__ and "{arguments}" in cls.__doc__:  # the shared table, written once
+            cls.__doc__ = cls.__doc__.replace("{arguments}", ARGUMENTS_TABLE)
 
     metadata = {"render_modes": ["rgb_array", "human"], "render_fps": round(1 / STEP_TIME)}
     num_cubes: int = 1

@@ -53,13 +53,7 @@ class PushEnv(RigidGymEnv):
     as in Fetch: an agent learns to keep the cube at the target). ``info["is_success"]``.
 
     ## Arguments
-    | argument | default | meaning |
-    |---|---|---|
-    | render_mode | None | "rgb_array" (480 x 480 frames, no display needed) or "human" (rerun viewer) |
-    | reward_type | "sparse" | "sparse" or "dense" (the ``Dense`` ids) |
-    | terminate_on_success | False | end the episode when the goal is reached |
-    | randomize | False | True, or a dict of ranges, to redraw cube mass, size, restitution and friction each reset (``rigid_gym.envs.base.RANDOMIZATION``) |
-    | observation_noise | 0.0 | standard deviation of Gaussian noise on ``observation`` |
+    {arguments}
     """
 
     num_cubes = 1

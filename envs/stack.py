@@ -56,8 +56,7 @@ class StackEnv(RigidGymEnv):
     change it); terminated on success only with ``terminate_on_success=True`` (default False).
 
     ## Arguments
-    As :class:`rigid_gym.envs.push.PushEnv`: render_mode, reward_type, terminate_on_success,
-    randomize, observation_noise.
+    {arguments}
     """
 
     num_cubes = 2

@@ -85,7 +85,7 @@ class ThrowEnv(RigidGymEnv):
     ``terminate_on_success=True`` (default False: success is judged where the cube ends).
 
     ## Arguments
-    As :class:`rigid_gym.envs.push.PushEnv`.
+    {arguments}
     """
 
     num_cubes = 1

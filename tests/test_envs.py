@@ -300,3 +300,12 @@ def test_render_needs_a_mode_and_a_reset():
     plain.reset(seed=0)
     with pytest.warns(UserWarning, match="render_mode"):
         assert plain.render() is None
+
+
+@pytest.mark.parametrize("env_id", TASK_IDS)
+def test_every_task_documents_its_spaces_rewards_start_end_and_arguments(env_id):
+    doc = type(make(env_id)).__doc__
+    for section in ("## Action space", "## Observation space", "## Rewards", "## Starting state",
+                    "## Episode end", "## Arguments", "| observation_noise | 0.0 |"):
+        assert section in doc
+    assert "{arguments}" not in doc
