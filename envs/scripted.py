@@ -119,9 +119,10 @@ def _throw(observation: dict) -> np.ndarray:
         if cube[2] > 0.03 or np.linalg.norm(cube[:2]) > 0.3:  # in flight or thrown:
             return np.array([-1.0, 0.0, 1.0, -1.0])  # follow through up and back, out of its way
         return _carry(pad, cube, cube, False)
-    # launch low and short of the workspace's edges, so that the release step's motion is not
-    # clipped (a clipped move would change the release velocity)
-    launch = np.array([0.15, np.clip(goal[1] * 0.5, -0.15, 0.15), 0.2])
+    # launch as far forward as the release step's motion stays unclipped (a clipped move would
+    # change the release velocity; from x = 0.15 the far bins were out of range), and low
+    # enough that the pad, which stops at the workspace's top, stays above the rising cube
+    launch = np.array([0.2, np.clip(goal[1] * 0.5, -0.2, 0.2), 0.2])
     if np.linalg.norm(pad - launch) > 0.01:
         return np.append(_toward(pad, launch), 1.0)
     velocity = _launch_velocity(cube, goal)
