@@ -77,9 +77,11 @@ def main():
                  for f in folders]
         minutes = np.mean([m.get("wall_seconds", np.nan) for m in metas]) / 60
         print(f"| {env_id} | {metas[0]['algo'].upper()} | {metas[0]['timesteps']:,} | "
-              f"{minutes:.0f} min | {len(folders)} | {np.mean(rates):.0%} ± "
+              f"{minutes:.1f} min | {len(folders)} | {np.mean(rates):.0%} ± "
               f"{np.std(rates):.0%} ({', '.join(f'{r:.0%}' for r in rates)}) |", flush=True)
-        plot_curves(env_id, folders, args.plots / f"curve_{env_id.split('/')[-1]}.png")
+        with_curves = [f for f in folders if (f / "evaluations.csv").is_file()]
+        if with_curves:
+            plot_curves(env_id, with_curves, args.plots / f"curve_{env_id.split('/')[-1]}.png")
 
 
 if __name__ == "__main__":

@@ -41,3 +41,23 @@ def test_bad_arguments_are_refused(tmp_path):
         train("rigid_gym/Push-v0", timesteps=0, out=tmp_path)
     with pytest.raises(ValueError, match="no model file"):
         evaluate(tmp_path / "missing.zip", env_id="rigid_gym/Push-v0")
+
+
+def test_learning_curves_are_grouped_by_env_and_drawn(tmp_path):
+    from rigid_gym.agents.results import find_runs, learning_curve, plot_curves
+
+    for seed, rates in ((0, "0.0 0.5 0.9"), (1, "0.1 0.4 1.0")):
+        folder = tmp_path / "Push-v0" / f"sac-seed{seed}"
+        folder.mkdir(parents=True)
+        (folder / "run.json").write_text(json.dumps({"env_id": "rigid_gym/Push-v0",
+                                                     "algo": "sac"}))
+        (folder / "model.zip").write_bytes(b"")
+        rows = "\n".join(f"{10 * (k + 1)},{r},-1.0,1.0" for k, r in enumerate(rates.split()))
+        (folder / "evaluations.csv").write_text(
+            "timesteps,success_rate,mean_return,wall_seconds\n" + rows + "\n")
+    runs = find_runs(tmp_path)
+    assert list(runs) == ["rigid_gym/Push-v0"] and len(runs["rigid_gym/Push-v0"]) == 2
+    steps, rates = learning_curve(runs["rigid_gym/Push-v0"][1])
+    assert steps.tolist() == [10, 20, 30] and rates.tolist() == [0.1, 0.4, 1.0]
+    plot_curves("rigid_gym/Push-v0", runs["rigid_gym/Push-v0"], tmp_path / "curve.png")
+    assert (tmp_path / "curve.png").stat().st_size > 10_000
