@@ -29,6 +29,7 @@ import yaml
 
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList, CheckpointCallback
 from stable_baselines3.common.env_util import make_vec_env
+from stable_baselines3.common.vec_env import VecCheckNan
 
 import rigid_gym  # noqa: F401  (registers the env ids)
 from rigid_gym.agents.evaluate import success_rate
@@ -98,6 +99,7 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     folder.mkdir(parents=True, exist_ok=True)
     env = make_vec_env(env_id, n_envs=n_envs, seed=seed, monitor_dir=str(folder),
                        monitor_kwargs={"info_keywords": ("is_success",)})
+    env = VecCheckNan(env, raise_exception=True)  # a diverging network fails where it starts
     kwargs = {**settings.get("kwargs", {}), **(overrides or {})}
     if algo != "ppo" and "her" in settings:
         from stable_baselines3 import HerReplayBuffer

@@ -226,6 +226,10 @@ class RigidGymEnv(gym.Env):
                       w.rotation[body][:, :2].T.ravel(), w.velocity[body],
                       w.angular_velocity[body]]
         vector = np.concatenate([np.ravel(p) for p in parts])
+        if not np.all(np.isfinite(vector)):  # a solver failure: say so here, not in a network
+            bad = np.flatnonzero(~np.isfinite(vector)).tolist()
+            raise RuntimeError(f"{type(self).__name__}: the simulation produced non-finite "
+                               f"state (observation entries {bad}) at t = {w.time:.3f} s")
         if self.observation_noise > 0.0:
             vector = vector + self.np_random.normal(0.0, self.observation_noise, vector.shape)
         return {

@@ -309,3 +309,11 @@ def test_every_task_documents_its_spaces_rewards_start_end_and_arguments(env_id)
                     "## Episode end", "## Arguments", "| observation_noise | 0.0 |"):
         assert section in doc
     assert "{arguments}" not in doc
+
+
+def test_a_non_finite_state_is_reported_by_the_env_not_passed_on():
+    env = make("rigid_gym/Push-v0")
+    env.reset(seed=0)
+    env.world.state.velocity[0, env.cubes[0], 0] = np.nan  # what a solver failure would leave
+    with pytest.raises(RuntimeError, match="non-finite state"):
+        env.step(np.zeros(3))
