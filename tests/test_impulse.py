@@ -69,3 +69,19 @@ def test_non_positive_sliding_denominator_leaves_the_static_impulse():
     j = impulse(k, v, 0.0, mu)
     np.testing.assert_allclose(j, static, atol=1e-14)
     np.testing.assert_allclose(v + k @ j, 0.0, atol=1e-14)
+
+
+def test_speeds_whose_squares_underflow_keep_the_friction_direction():
+    """A resting cube pinched between the table and a kinematic pad once met v ~ 1e-202 m/s
+    with a pulling static impulse: |u|^2 underflowed to 0, and the fallback direction divided
+    0 by 0 (the step turned NaN). The arguments are the ones recorded then."""
+    k = np.array([[39.99999999999998, 8.570883641437328, 8.570883641437334],
+                  [8.570883641437328, 29.897336426337205, -14.99999999999999],
+                  [8.570883641437334, -14.999999999999991, 29.897336426337187]])
+    v = (8.165126103939127e-202, -1.168030658331746e-204, 1.1680306583317453e-204)
+    n = (-5.350036542037848e-19, -2.4283442764624865e-19, -1.0)
+    j = np.array(contact_impulse(k, *v, *n, 0.0, 0.5))
+    assert np.all(np.isfinite(j))
+    # scaled up by 1e200 the same contact is ordinary: the answers must agree, scaled back
+    big = np.array(contact_impulse(k, *(1e200 * np.array(v)), *n, 0.0, 0.5))
+    np.testing.assert_allclose(j * 1e200, big, rtol=1e-12)

@@ -291,3 +291,25 @@ def test_for_scene_leaves_out_what_cannot_matter():
     floating.add_body(rg.Sphere(0.1), mass=1.0, position=(1, 0, 0))
     assert rg.SolverConfig.for_scene(floating).shock_sweeps == 0
     assert rg.SolverConfig.for_scene(floating, shock_sweeps=3).shock_sweeps == 3
+
+
+@pytest.mark.parametrize("spin", [(0.0, -1e-20, 0.0), (0.0, -6.018531076210112e-36, 0.0)])
+def test_a_cube_pinched_at_rest_between_the_table_and_a_kinematic_pad_stays_finite(spin):
+    """A trained Push agent parked the pad on a resting cube's top; with an angular momentum of
+    1e-20 kg m^2/s (or the 6e-36 and the 1e-19 rad tilt it had) the step turned NaN: squares of
+    approach and sliding speeds near 1e-160 m/s underflowed to 0 and were divided by."""
+    scene = rg.Scene()
+    scene.add_ground(friction=0.5)
+    start = (-0.2271443102895005, 0.2396576523051497, 0.02)
+    cube = scene.add_body(rg.Box((0.02, 0.02, 0.02)), mass=0.1, position=start, friction=0.5)
+    scene.add_body(rg.Box((0.02, 0.02, 0.015)), kinematic=True, position=(-0.25, 0.25, 0.055),
+                   friction=0.5)
+    world = rg.World(scene, dt=0.004)
+    world.state.orientation[0, cube] = (1.0, -1.2141721382312432e-19, 2.6750182710189240e-19,
+                                        -6.9799483408453090e-19)
+    world.state.velocity[0, cube] = (6.1629758220391547e-33, -3.0814879110195774e-33, 0.0)
+    world.state.angular_momentum[0, cube] = spin
+    world._refresh_derived()
+    world.step(100)
+    assert np.all(np.isfinite(world.position)) and np.all(np.isfinite(world.velocity))
+    np.testing.assert_allclose(world.position[cube], start, atol=1e-12)

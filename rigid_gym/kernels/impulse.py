@@ -74,13 +74,18 @@ def contact_impulse(k, vx, vy, vz, nx, ny, nz, e, mu):
     if jt <= mu * jn:
         return jx, jy, jz
     # sliding: friction opposes the tangential velocity (or, if there is none, the static
-    # impulse's tangential part shows the direction it would slide)
+    # impulse's tangential part shows the direction it would slide; if that is zero too, the
+    # static impulse failed by pulling (j_n < 0) and friction has nothing to act on)
     ux, uy, uz = vx - vn * nx, vy - vn * ny, vz - vn * nz
-    ut = math.sqrt(ux * ux + uy * uy + uz * uz)
-    if ut > 0.0:
+    scale = max(abs(ux), abs(uy), abs(uz))  # normalise u / scale: |u|^2 may underflow
+    if scale > 0.0:
+        ux, uy, uz = ux / scale, uy / scale, uz / scale
+        ut = math.sqrt(ux * ux + uy * uy + uz * uz)
         tx, ty, tz = ux / ut, uy / ut, uz / ut
-    else:
+    elif jt > 0.0:
         tx, ty, tz = -tx / jt, -ty / jt, -tz / jt
+    else:
+        tx = ty = tz = 0.0
     dx, dy, dz = nx - mu * tx, ny - mu * ty, nz - mu * tz
     denom = (nx * (k[0, 0] * dx + k[0, 1] * dy + k[0, 2] * dz)
              + ny * (k[1, 0] * dx + k[1, 1] * dy + k[1, 2] * dz)

@@ -184,6 +184,9 @@ def approach_weighted_centre(scratch, seed, count):
             ny += weight * scratch.normal[i, 1]
             nz += weight * scratch.normal[i, 2]
     cx, cy, cz = cx / total, cy / total, cz / total
+    # average before normalising: with approach speeds near 1e-160 m/s the weighted sum's
+    # square underflows to 0 (it did: a cube at rest under a kinematic pad turned NaN)
+    nx, ny, nz = nx / total, ny / total, nz / total
     norm = math.sqrt(nx * nx + ny * ny + nz * nz)
     radius = 0.0
     for i in range(seed, count):
