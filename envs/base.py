@@ -174,9 +174,12 @@ class RigidGymEnv(gym.Env):
                              f"are refused), got {action.tolist()}")
         action = np.clip(action, -1.0, 1.0)  # documented: outside [-1, 1] is clipped
         self.gripper.command(action[:3], action[3] if self.has_grip else None)
-        for _ in range(SOLVER_STEPS):
-            self.world.step(1)
-            self.gripper.carry()
+        if self.gripper.held is None:
+            self.world.step(SOLVER_STEPS)  # one call: nothing to carry between solver steps
+        else:
+            for _ in range(SOLVER_STEPS):
+                self.world.step(1)
+                self.gripper.carry()
         observation = self._observation()
         success = self._is_success(observation)
         info = {"is_success": success}

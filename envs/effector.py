@@ -141,10 +141,13 @@ class SuctionGripper:
         return lowest
 
 
+CORNER_SIGNS = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+"""(8, 3): a box's corners in units of its half extents."""
+
+
 def box_corners(centre: np.ndarray, rotation: np.ndarray, half_extents) -> np.ndarray:
     """(8, 3) corners, m, of a box at ``centre`` (3,) with ``rotation`` (3, 3)."""
-    signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
-    return centre + (signs * np.asarray(half_extents)) @ rotation.T
+    return centre + (CORNER_SIGNS * np.asarray(half_extents)) @ rotation.T
 
 
 def footprints_overlap(corners_a, rotation_a, corners_b, rotation_b) -> bool:

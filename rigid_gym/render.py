@@ -24,7 +24,8 @@ from rigid_gym.kernels import raster
 from rigid_gym.kernels.integrate import DYNAMIC, KINEMATIC
 from rigid_gym.meshes import _lathe, box_mesh
 from rigid_gym.scene import Scene, _vector
-from rigid_gym.shapes import SOLID_SHAPES, Box, Capsule, Compound, Mesh, Plane, Sphere
+from rigid_gym.shapes import (SOLID_SHAPES, Box, Capsule, Compound, Mesh, Plane, Sphere,
+                              _finite_array, _positive)
 
 SPHERE_SEGMENTS = 24
 """Steps around the axis of a tessellated sphere or capsule (its rings have 24 vertices)."""
@@ -138,7 +139,7 @@ def tessellate(shape, plane_half_size: float = 1.0) -> tuple[np.ndarray, np.ndar
     if isinstance(shape, Compound):
         return _tessellate_compound(shape, plane_half_size)
     if isinstance(shape, Plane):
-        return _tiled_square(_number(plane_half_size, "tessellate.plane_half_size", positive=True))
+        return _tiled_square(_positive(plane_half_size, "tessellate.plane_half_size"))
     raise ValueError(f"tessellate.shape: expected Sphere, Box, Capsule, Mesh, Compound or Plane, "
                      f"got {type(shape).__name__}")
 
@@ -171,7 +172,7 @@ class Renderer:
         self.light = light / np.linalg.norm(light)  # (3,) unit vector towards the light
         self.num_bodies = len(scene)
         body_colors = _body_colors(scene, colors)
-        half = _number(plane_half_size, "Renderer.plane_half_size", positive=True)
+        half = _positive(plane_half_size, "Renderer.plane_half_size")
         self._parts = [_body_part(b, body_colors[b.index], half) for b in scene.bodies]
         self._rotation = np.tile(np.eye(3), (self.num_bodies, 1, 1))  # (N, 3, 3) per instance:
         self._translation = np.zeros((self.num_bodies, 3))  # bodies, then markers; m
@@ -242,8 +243,8 @@ class Renderer:
         mass, as ``World.position``) and ``orientation`` (n, 4) unit quaternions (w, x, y, z)
         (as ``World.orientation``). Returns a new (height, width, 3) uint8 RGB array."""
         n = self.num_bodies
-        x = _array(position, (n, 3), "Renderer.render.position")
-        q = _array(orientation, (n, 4), "Renderer.render.orientation")
+        x = _finite_array(position, (n, 3), "Renderer.render.position")
+        q = _finite_array(orientation, (n, 4), "Renderer.render.orientation")
         quat.check_unit(q, "Renderer.render.orientation")
         self._rotation[:n] = quat.to_matrix(q)
         self._translation[:n] = x
@@ -461,14 +462,14 @@ def _light_axes(light: np.ndarray) -> np.ndarray:
     return np.array([u, np.cross(light, u), light])
 
 
-def _number(value, where: str, positive: bool = False) -> float:
-    """``value`` as a finite float (> 0 if ``positive``), or a ValueError naming ``where``."""
+def _number(value, where: str) -> float:
+    """``value`` as a finite float, or a ValueError naming ``where``."""
     try:
         x = float(value)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{where}: expected a number, got {value!r}") from exc
-    if not np.isfinite(x) or (positive and x <= 0.0):
-        raise ValueError(f"{where}: must be finite{' and > 0' if positive else ''}, got {value!r}")
+    if not np.isfinite(x):
+        raise ValueError(f"{where}: must be finite, got {value!r}")
     return x
 
 
@@ -497,16 +498,3 @@ def _color(value, where: str) -> np.ndarray:
     if np.any((rgb < 0.0) | (rgb > 1.0)):
         raise ValueError(f"{where}: RGB channels must be in [0, 1], got {rgb.tolist()}")
     return rgb
-
-
-def _array(value, shape: tuple[int, int], where: str) -> np.ndarray:
-    """A finite float64 array of exactly ``shape``."""
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{where}: expected numbers, got {type(value).__name__}") from exc
-    if arr.shape != shape:
-        raise ValueError(f"{where}: expected shape {shape} (one row per body), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{where}: must be finite")
-    return arr
