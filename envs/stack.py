@@ -40,10 +40,11 @@ class StackEnv(RigidGymEnv):
     | desired_goal | 6 | the targets: cube 0 on the table at the tower's x, y; cube 1 one edge above it |
 
     ## Rewards
-    The goal is reached when each cube is within 0.05 m of its target **and** the tower
-    stands: cube 1's centre is within half an edge (0.02 m) of cube 0's in x, y and 1.5 to 2.5
-    half edges (0.03-0.05 m) above it, i.e. resting on it. Both tests read only the goals, so
-    HER can recompute them. sparse: 0 when reached, else -1; dense: minus the distance between
+    The goal is reached when each cube is within 0.05 m of its target **and** the cubes are
+    placed relative to each other as the targets are: cube 1's offset from cube 0 is within half
+    an edge (0.02 m) of the targets' offset in x, y and within a quarter edge (0.01 m) in z. For
+    the env's targets (a tower) that means cube 1 rests on cube 0. Both tests read only the
+    goals, so HER can recompute them, also for goals relabelled from where the cubes lay. sparse: 0 when reached, else -1; dense: minus the distance between
     the 6-vectors, m.
 
     ## Starting state
@@ -81,10 +82,15 @@ class StackEnv(RigidGymEnv):
         error = achieved_goal - desired_goal
         near = ((np.linalg.norm(error[..., :3], axis=-1) < DISTANCE_THRESHOLD)
                 & (np.linalg.norm(error[..., 3:], axis=-1) < DISTANCE_THRESHOLD))
-        rise = achieved_goal[..., 3:] - achieved_goal[..., :3]
-        stands = ((np.linalg.norm(rise[..., :2], axis=-1) < CUBE_HALF)
-                  & (rise[..., 2] > 1.5 * CUBE_HALF) & (rise[..., 2] < 2.5 * CUBE_HALF))
-        return near & stands
+        # the cubes' relative placement matches the target's: for a target tower (cube 1 one
+        # edge above cube 0) this says cube 1 rests on cube 0. Comparing with the target's
+        # placement, not with a fixed tower, keeps goals that HER relabels from where the
+        # cubes ended up (lying apart) reachable; a fixed tower test made them all failures.
+        mismatch = ((achieved_goal[..., 3:] - achieved_goal[..., :3])
+                    - (desired_goal[..., 3:] - desired_goal[..., :3]))
+        same_shape = ((np.linalg.norm(mismatch[..., :2], axis=-1) < CUBE_HALF)
+                      & (np.abs(mismatch[..., 2]) < 0.5 * CUBE_HALF))
+        return near & same_shape
 
     def _add_markers(self, renderer):
         from rigid_gym.render import DYNAMIC_PALETTE  # each target in its cube's colour

@@ -113,6 +113,25 @@ def test_terminate_on_success_ends_the_episode():
     assert terminated and info["is_success"] and reward == 0.0 and step < 49
 
 
+
+def test_stack_needs_the_tower_but_a_relabelled_goal_of_cubes_apart_is_reachable():
+    env = make("rigid_gym/Stack-v0")
+    env.reset(seed=0)
+    h = CUBE_HALF
+    tower = np.array([0.1, 0.0, h, 0.1, 0.0, 3 * h])  # the kind of target the env samples
+    assert env.goal_reached(tower, tower)
+    assert env.goal_reached(tower + [0.03, 0, 0, 0.03, 0.01, 0.004], tower)  # near, still a tower
+    # both cubes within 5 cm of their targets but side by side on the table: no tower
+    side_by_side = np.array([0.1, 0.0, h, 0.1 + 0.03, 0.0, h])
+    assert np.linalg.norm(side_by_side[3:] - tower[3:]) < 0.05
+    assert not env.goal_reached(side_by_side, tower)
+    assert not env.goal_reached(tower + [0, 0, 0, 0.025, 0, 0], tower)  # overhanging by > h
+    # a goal relabelled from where the cubes lay apart is reached by cubes lying that way
+    apart = np.array([-0.1, 0.05, h, 0.1, -0.05, h])
+    assert env.goal_reached(apart + 0.01, apart)
+    assert not env.goal_reached(apart, tower) and not env.goal_reached(tower, apart)
+
+
 # -- the gripper -------------------------------------------------------------------------------
 
 def pad_over_cube(env, cube: int = 0):
