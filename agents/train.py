@@ -36,6 +36,9 @@ from rigid_gym.agents.evaluate import success_rate
 
 HYPERPARAMS = Path(__file__).with_name("hyperparams.yml")
 ALGORITHMS = ("sac", "tqc", "ppo")
+DEMO_SEED = 2_000_000
+"""Demonstration episodes use seeds DEMO_SEED + 1000 * seed + rank, apart from the training seeds
+(small) and the evaluation seeds (``EVAL_SEED`` = 1,000,000 onwards)."""
 
 
 def load_hyperparams(env_id: str) -> dict:
@@ -73,13 +76,16 @@ def run_directory(out: Path, env_id: str, algo: str, seed: int) -> Path:
 def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None, seed: int = 0,
           n_envs: int | None = None, out: str | Path = "runs", eval_freq: int = 10_000,
           eval_episodes: int = 20, checkpoint_freq: int = 0, progress_bar: bool = False,
-          threads: int = 1, verbose: int = 0, overrides: dict | None = None) -> Path:
+          threads: int = 1, verbose: int = 0, overrides: dict | None = None,
+          demonstrations: int | None = None) -> Path:
     """Train on ``env_id`` and return the run folder (see the module docstring).
 
     algo, timesteps (env steps), n_envs: override hyperparams.yml. eval_freq: env steps between
     evaluations of ``eval_episodes`` deterministic episodes (0: none). checkpoint_freq: env
     steps between saved checkpoints (0: none). threads: PyTorch's CPU threads. overrides:
     algorithm arguments that replace those of hyperparams.yml (e.g. learning_starts).
+    demonstrations: scripted episodes put in the replay buffer before training (off-policy
+    only; default: hyperparams.yml's ``demonstrations``, else 0), see ``add_demonstrations``.
     """
     import torch
 
@@ -106,7 +112,12 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
         kwargs.update(replay_buffer_class=HerReplayBuffer,
                       replay_buffer_kwargs=dict(settings["her"]))
     model = cls("MultiInputPolicy", env, seed=seed, verbose=verbose, **kwargs)
-    _write_run(folder, env_id, algo, seed, timesteps, n_envs, kwargs)
+    demonstrations = _count(demonstrations if demonstrations is not None
+                            else settings.get("demonstrations", 0), "demonstrations", 0)
+    if demonstrations and algo == "ppo":
+        raise ValueError("train: demonstrations fill a replay buffer; ppo has none")
+    demo = add_demonstrations(model, env_id, demonstrations, seed) if demonstrations else None
+    _write_run(folder, env_id, algo, seed, timesteps, n_envs, kwargs, demo)
 
     callbacks = []
     if eval_freq:
@@ -131,10 +142,43 @@ def _count(value, name: str, low: int) -> int:
     return int(value)
 
 
-def _write_run(folder: Path, env_id, algo, seed, timesteps, n_envs, kwargs) -> None:
+def add_demonstrations(model, env_id: str, episodes: int, seed: int) -> dict:
+    """Put ``episodes`` episodes of the scripted policy (``rigid_gym.envs.scripted``) into
+    ``model``'s replay buffer, as SB3 stores its own transitions, and return
+    ``{"episodes", "env_steps", "success_rate"}``.
+
+    Demonstrations in the replay buffer (Vecerik et al. 2017, Nair et al. 2018) show a sparse
+    reward off-policy learner what success looks like on tasks that random exploration almost
+    never solves (Stack); the learner still has to work out the values and the policy itself.
+    Their env steps count towards a run's total in the results table.
+    """
+    from rigid_gym.envs.scripted import scripted_policy
+
+    n_envs = model.n_envs
+    env = make_vec_env(env_id, n_envs=n_envs, seed=DEMO_SEED + 1000 * seed)
+    policies = [scripted_policy(e) for e in env.envs]
+    obs = env.reset()
+    finished, successes, steps = 0, 0.0, 0
+    while finished < episodes:
+        actions = np.stack([policy({key: value[i] for key, value in obs.items()})
+                            for i, policy in enumerate(policies)]).astype(np.float32)
+        next_obs, rewards, dones, infos = env.step(actions)
+        stored = {key: value.copy() for key, value in next_obs.items()}
+        for i in np.flatnonzero(dones):  # the VecEnv has reset these; store the true last obs
+            for key in stored:
+                stored[key][i] = infos[i]["terminal_observation"][key]
+            successes += infos[i]["is_success"]
+        model.replay_buffer.add(obs, stored, model.policy.scale_action(actions), rewards, dones,
+                                infos)
+        obs, finished, steps = next_obs, finished + int(dones.sum()), steps + n_envs
+    env.close()
+    return {"episodes": finished, "env_steps": steps, "success_rate": successes / finished}
+
+
+def _write_run(folder: Path, env_id, algo, seed, timesteps, n_envs, kwargs, demo) -> None:
     record = {
         "env_id": env_id, "algo": algo, "seed": seed, "timesteps": timesteps,
-        "n_envs": n_envs, "command": " ".join(sys.argv),
+        "n_envs": n_envs, "demonstrations": demo, "command": " ".join(sys.argv),
         "kwargs": {k: v if isinstance(v, (int, float, str, dict, list)) else repr(v)
                    for k, v in kwargs.items()},
     }

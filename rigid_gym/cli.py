@@ -153,7 +153,8 @@ def train(args) -> int:
     folder = run_training(args.env_id, algo=args.algo, timesteps=args.steps, seed=args.seed,
                           n_envs=args.n_envs, out=args.out, eval_freq=args.eval_freq,
                           eval_episodes=args.eval_episodes,
-                          checkpoint_freq=args.checkpoint_freq, progress_bar=args.progress_bar)
+                          checkpoint_freq=args.checkpoint_freq, progress_bar=args.progress_bar,
+                          demonstrations=args.demos)
     print(f"trained {args.env_id}: {folder / 'model.zip'}")
     if args.eval_freq:
         last = (folder / "evaluations.csv").read_text().strip().splitlines()[-1].split(",")
@@ -277,6 +278,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--eval-episodes", type=bounded(int, 1, 10**4), default=20)
     p.add_argument("--checkpoint-freq", type=bounded(int, 0, 10**9), default=0,
                    help="env steps between checkpoints (0: none)")
+    p.add_argument("--demos", type=bounded(int, 0, 10**6), default=None,
+                   help="scripted episodes put in the replay buffer first (off-policy only; "
+                        "default: hyperparams.yml, else 0)")
     p.add_argument("--progress-bar", action="store_true")
     p = commands.add_parser("evaluate", help="success rate of a trained model")
     p.add_argument("model", help="a model.zip written by rigid-gym train")

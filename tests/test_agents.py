@@ -4,10 +4,12 @@ import csv
 import json
 
 import gymnasium as gym
+import numpy as np
 import pytest
 
 from rigid_gym.agents.evaluate import evaluate, load_model
-from rigid_gym.agents.train import load_hyperparams, train
+from rigid_gym.agents.train import DEMO_SEED, add_demonstrations, load_hyperparams, train
+from rigid_gym.envs.scripted import scripted_policy
 
 
 @pytest.mark.parametrize("env_id", ["rigid_gym/Push-v0", "rigid_gym/Stack-v0",
@@ -19,10 +21,13 @@ def test_a_short_run_trains_saves_and_evaluates(env_id, tmp_path):
     small = {"learning_starts": start, "batch_size": 32} if settings["algo"] != "ppo" else \
         {"n_steps": 50, "batch_size": 50}
     steps = start + 40
+    demos = 1 if settings.get("demonstrations") else 0  # one, not hyperparams.yml's hundreds
     folder = train(env_id, timesteps=steps, n_envs=2 if settings["algo"] == "ppo" else 1,
-                   out=tmp_path, eval_freq=steps // 2, eval_episodes=1, overrides=small)
+                   out=tmp_path, eval_freq=steps // 2, eval_episodes=1, overrides=small,
+                   demonstrations=demos)
     run = json.loads((folder / "run.json").read_text())
     assert run["env_id"] == env_id and run["algo"] == settings["algo"]
+    assert (run["demonstrations"] or {"episodes": 0})["episodes"] == demos
     with open(folder / "evaluations.csv") as f:
         rows = list(csv.DictReader(f))
     assert [int(r["timesteps"]) for r in rows] == [steps // 2 * k for k in (1, 2)]
@@ -32,6 +37,35 @@ def test_a_short_run_trains_saves_and_evaluates(env_id, tmp_path):
     assert load_model(folder / "model.zip", gym.make(env_id)).num_timesteps == steps
 
 
+def test_demonstrations_are_stored_as_the_scripted_policy_played_them():
+    from stable_baselines3 import SAC, HerReplayBuffer
+    from stable_baselines3.common.env_util import make_vec_env
+
+    env_id = "rigid_gym/Stack-v0"
+    model = SAC("MultiInputPolicy", make_vec_env(env_id, n_envs=1), buffer_size=1000,
+                replay_buffer_class=HerReplayBuffer, policy_kwargs={"net_arch": [8]})
+    demo = add_demonstrations(model, env_id, episodes=2, seed=3)
+    assert demo["episodes"] == 2 and demo["env_steps"] == 200
+    assert 0.0 <= demo["success_rate"] <= 1.0
+    buffer = model.replay_buffer
+    assert buffer.pos == 200 and list(buffer.ep_length[:200, 0]) == [100] * 200
+    # replay the first episode by hand: same actions, same observations, and the stored last
+    # next-observation is the episode's true end, not the next episode's reset
+    env = gym.make(env_id)
+    policy = scripted_policy(env)
+    obs, _ = env.reset(seed=DEMO_SEED + 1000 * 3)
+    for t in range(100):
+        action = policy(obs).astype(np.float32)  # as a VecEnv passes it
+        # SB3 stores actions rescaled to [-1, 1]: an identity here, up to float32 rounding
+        np.testing.assert_allclose(buffer.actions[t, 0], action, rtol=0, atol=1e-7)
+        assert (buffer.observations["observation"][t, 0] == obs["observation"]).all()
+        obs, reward, *_ = env.step(action)
+        assert buffer.rewards[t, 0] == reward
+    assert (buffer.next_observations["achieved_goal"][99, 0] == obs["achieved_goal"]).all()
+    # the episode ended by truncation: SB3 keeps bootstrapping past it (done and timeout set)
+    assert buffer.dones[99, 0] == 1 and buffer.timeouts[99, 0] == 1
+
+
 def test_bad_arguments_are_refused(tmp_path):
     with pytest.raises(ValueError, match="no settings for"):
         train("rigid_gym/Nope-v0", out=tmp_path)
@@ -39,6 +73,8 @@ def test_bad_arguments_are_refused(tmp_path):
         train("rigid_gym/Push-v0", algo="dqn", out=tmp_path)
     with pytest.raises(ValueError, match="timesteps must be an int >= 1"):
         train("rigid_gym/Push-v0", timesteps=0, out=tmp_path)
+    with pytest.raises(ValueError, match="ppo has none"):
+        train("rigid_gym/PushDense-v0", demonstrations=1, out=tmp_path)
     with pytest.raises(ValueError, match="no model file"):
         evaluate(tmp_path / "missing.zip", env_id="rigid_gym/Push-v0")
 
