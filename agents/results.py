@@ -53,12 +53,27 @@ def plot_curves(env_id: str, folders: list[Path], path: Path) -> None:
                     label=f"range over {len(folders)} seeds")
     ax.plot(steps, rates.mean(axis=0), lw=2, label="mean")
     ax.set(xlabel="env steps", ylabel="success rate (evaluation)", ylim=(-0.02, 1.02),
-           title=f"{env_id}: {json.loads((folders[0] / 'run.json').read_text())['algo'].upper()}")
+           title=f"{env_id}: {method(json.loads((folders[0] / 'run.json').read_text()))}")
     ax.grid(alpha=0.3)
     ax.legend(loc="lower right")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def method(run: dict) -> str:
+    """The algorithm as the table names it, e.g. "SAC + HER + 200 demos"."""
+    name = run["algo"].upper()
+    if "HerReplayBuffer" in str(run["kwargs"].get("replay_buffer_class", "")):
+        name += " + HER"
+    demos = run.get("demonstrations")
+    return f"{name} + {demos['episodes']} demos" if demos else name
+
+
+def env_steps(run: dict) -> str:
+    """Training env steps, plus the demonstrations' steps where there were any."""
+    demos = run.get("demonstrations")
+    return f"{run['timesteps']:,}" + (f" + {demos['env_steps']:,} demo" if demos else "")
 
 
 def main():
@@ -76,8 +91,8 @@ def main():
         rates = [evaluate(f / "model.zip", env_id, args.episodes)["success_rate"]
                  for f in folders]
         minutes = np.mean([m.get("wall_seconds", np.nan) for m in metas]) / 60
-        print(f"| {env_id} | {metas[0]['algo'].upper()} | {metas[0]['timesteps']:,} | "
-              f"{minutes:.1f} min | {len(folders)} | {np.mean(rates):.0%} ± "
+        print(f"| {env_id} | {method(metas[0])} | {env_steps(metas[0])} | "
+              f"{minutes:.0f} min | {len(folders)} | {np.mean(rates):.0%} ± "
               f"{np.std(rates):.0%} ({', '.join(f'{r:.0%}' for r in rates)}) |", flush=True)
         with_curves = [f for f in folders if (f / "evaluations.csv").is_file()]
         if with_curves:

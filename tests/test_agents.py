@@ -86,7 +86,7 @@ def test_learning_curves_are_grouped_by_env_and_drawn(tmp_path):
         folder = tmp_path / "Push-v0" / f"sac-seed{seed}"
         folder.mkdir(parents=True)
         (folder / "run.json").write_text(json.dumps({"env_id": "rigid_gym/Push-v0",
-                                                     "algo": "sac"}))
+                                                     "algo": "sac", "kwargs": {}}))
         (folder / "model.zip").write_bytes(b"")
         rows = "\n".join(f"{10 * (k + 1)},{r},-1.0,1.0" for k, r in enumerate(rates.split()))
         (folder / "evaluations.csv").write_text(
@@ -97,3 +97,14 @@ def test_learning_curves_are_grouped_by_env_and_drawn(tmp_path):
     assert steps.tolist() == [10, 20, 30] and rates.tolist() == [0.1, 0.4, 1.0]
     plot_curves("rigid_gym/Push-v0", runs["rigid_gym/Push-v0"], tmp_path / "curve.png")
     assert (tmp_path / "curve.png").stat().st_size > 10_000
+
+
+def test_the_table_names_the_method_and_counts_demonstration_steps():
+    from rigid_gym.agents.results import env_steps, method
+
+    run = {"algo": "sac", "timesteps": 150_000, "demonstrations": None,
+           "kwargs": {"replay_buffer_class": "<class '...her_replay_buffer.HerReplayBuffer'>"}}
+    assert (method(run), env_steps(run)) == ("SAC + HER", "150,000")
+    run["demonstrations"] = {"episodes": 100, "env_steps": 5000, "success_rate": 1.0}
+    assert (method(run), env_steps(run)) == ("SAC + HER + 100 demos", "150,000 + 5,000 demo")
+    assert method({"algo": "ppo", "kwargs": {}}) == "PPO"
