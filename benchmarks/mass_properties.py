@@ -9,7 +9,7 @@ random points in the bounding box) prints a markdown table of
   ms             wall time of one estimate, median of 3 runs after a warm-up call (so numba
                  compilation is not counted)
 and then the observed convergence order: the least-squares slope of log(error) against
-log(points), leaving out errors at round-off level ("exact": the grid and Monte Carlo masses of
+log(points), leaving out errors at round-off level (1e-13, ``rigid_gym.report.accuracy``; "exact": the grid and Monte Carlo masses of
 a box, whose bounding box is the box itself). What to expect: -1/2 for Monte Carlo. For the
 grid, -2/3 where only the midpoint rule's h^2 per cell is missed (the box's tensor); -1/3 (first
 order in h) with a sawtooth where a flat face cuts the cells at a fixed fraction (the L: faces at
@@ -19,13 +19,9 @@ errors partly cancel (sphere, capsule).
     python benchmarks/mass_properties.py
 """
 
-import statistics
-import time
-
-import numpy as np
-
 from rigid_gym.inertia import mass_properties, mass_properties_grid, mass_properties_monte_carlo
 from rigid_gym.meshes import box_mesh, l_shape_mesh
+from rigid_gym.report.accuracy import inertia_errors as errors, median_seconds, observed_order
 from rigid_gym.shapes import Box, Capsule, Sphere
 
 DENSITY = 1000.0  # kg/m^3
@@ -43,7 +39,6 @@ REPEATS = 3
 
 
 SEEDS = range(5)
-ROUND_OFF = 1e-12
 
 
 def estimators():
@@ -55,30 +50,10 @@ def estimators():
             shape, DENSITY, n, seed)
 
 
-def median_seconds(call) -> float:
-    times = []
-    for _ in range(REPEATS):
-        start = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - start)
-    return statistics.median(times)
-
-
-def errors(estimates, exact) -> tuple[float, float]:
-    """Relative (mass, inertia) errors of ``estimates``, root mean square over them."""
-    mass = [(e.mass - exact.mass) / exact.mass for e in estimates]
-    inertia = [np.linalg.norm(e.inertia - exact.inertia) / np.linalg.norm(exact.inertia)
-               for e in estimates]
-    return float(np.sqrt(np.mean(np.square(mass)))), float(np.sqrt(np.mean(np.square(inertia))))
-
-
 def order(points: list[int], errs: list[float]) -> str:
     """Slope of log(error) against log(points) over errors above round-off, or "exact"."""
-    kept = [(p, e) for p, e in zip(points, errs) if e > ROUND_OFF]
-    if len(kept) < 2:
-        return "exact"
-    x, y = np.log([p for p, _ in kept]), np.log([e for _, e in kept])
-    return f"{np.polyfit(x, y, 1)[0]:+.2f}"
+    slope = observed_order(points, errs)
+    return "exact" if slope is None else f"{slope:+.2f}"
 
 
 def main():
@@ -89,7 +64,7 @@ def main():
         by_method = {}
         for method, points, seeds, estimate in estimators():
             mass_err, inertia_err = errors([estimate(shape, seed) for seed in seeds], exact)
-            seconds = median_seconds(lambda: estimate(shape, 0))
+            seconds = median_seconds(lambda: estimate(shape, 0), REPEATS)
             rows.append(f"| {name} | {method} | {points:,} | {mass_err:.2e} | {inertia_err:.2e} "
                         f"| {1e3 * seconds:.1f} |")
             by_method.setdefault(method, []).append((points, mass_err, inertia_err))

@@ -19,6 +19,7 @@ import numpy as np
 
 import rigid_gym as rg
 from rigid_gym import analytic
+from rigid_gym.report.scenes import spinning_body
 
 MOMENTS = (1.0, 2.0, 3.0)
 OMEGA0 = (0.3, 0.0, 1.0)
@@ -27,9 +28,7 @@ DTS = (1 / 25, 1 / 50, 1 / 100, 1 / 200, 1 / 400)
 
 
 def run(order: int, dt: float) -> tuple[float, float, float]:
-    scene = rg.Scene(gravity=(0.0, 0.0, 0.0))
-    scene.add_body(rg.Box((0.1, 0.2, 0.3)), mass=1.0, inertia=MOMENTS, angular_velocity=OMEGA0)
-    world = rg.World(scene, dt=dt, config=rg.SolverConfig(rotation_order=order))
+    world = rg.World(spinning_body(MOMENTS, OMEGA0), dt=dt, config=rg.SolverConfig(rotation_order=order))
     steps = int(round(DURATION / dt))
     exact = analytic.torque_free_angular_velocity(MOMENTS, OMEGA0, dt * np.arange(1, steps + 1))
     e0 = world.kinetic_energy()

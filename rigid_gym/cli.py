@@ -7,13 +7,15 @@
     rigid-gym train ENV_ID [--algo sac|tqc|ppo] [--steps N] [--seed S] [--n-envs N] [--out DIR]
                     [--eval-freq N] [--eval-episodes N] [--checkpoint-freq N] [--progress-bar]
     rigid-gym evaluate MODEL [--env ENV_ID] [--episodes N] [--record DIR]
+    rigid-gym report [--out DIR] [--quick] [--no-compare]
 
 ``demo`` runs a few scenes (tumbling bodies of every shape, a ten-cube tower, a bouncing ball,
 a sliding box) and prints each result next to its closed form. ``record`` writes episodes of
 an env to ``.rrd`` files (``rigid_gym.recording``) and ``replay`` opens them in the rerun
 viewer installed with rerun-sdk. ``train`` and ``evaluate`` run the stable-baselines3
 baselines (``rigid_gym.agents``): settings from ``agents/hyperparams.yml``, success rates over
-seeded episodes.
+seeded episodes. ``report`` regenerates the accuracy and stability report
+(``rigid_gym.report``: OUT/report.md and OUT/images/report/*.png).
 """
 
 from __future__ import annotations
@@ -289,11 +291,23 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--episodes", type=bounded(int, 1, 10**5), default=100)
     p.add_argument("--record", metavar="DIR", default=None,
                    help="also record up to 3 episodes to DIR")
+    p = commands.add_parser("report", help="regenerate the accuracy and stability report")
+    p.add_argument("--out", default="docs",
+                   help="folder for report.md and images/report/ (default docs)")
+    p.add_argument("--quick", action="store_true",
+                   help="a tiny sweep and short stiff runs (seconds), to check the pipeline")
+    p.add_argument("--no-compare", action="store_true",
+                   help="skip the peer engines (PyBullet) even when installed")
     args = parser.parse_args(argv)
     if args.command == "demo":
         return demo(args.steps, args.dt, args.order)
     if args.command == "replay":
         return replay(args.files)
+    if args.command == "report":
+        from rigid_gym.report import generate
+
+        generate(args.out, quick=args.quick, compare=not args.no_compare)
+        return 0
     try:
         if args.command == "train":
             return train(args)

@@ -6,15 +6,14 @@ import pytest
 import rigid_gym as rg
 from rigid_gym import analytic
 from rigid_gym import quaternion as quat
+from rigid_gym.report import scenes
 
 ASYMMETRIC_MOMENTS = (1.0, 2.0, 3.0)  # kg m^2, I1 < I2 < I3
 OMEGA0 = (0.3, 0.0, 1.0)  # rad/s, body frame, on the omega_2 = 0 section (analytic.py)
 
 
 def spinning_body(moments, omega, order, dt, num_worlds=None):
-    scene = rg.Scene(gravity=(0.0, 0.0, 0.0))
-    scene.add_body(rg.Box((0.1, 0.2, 0.3)), mass=1.0, inertia=moments, angular_velocity=omega)
-    return rg.World(scene, dt=dt, num_worlds=num_worlds,
+    return rg.World(scenes.spinning_body(moments, omega), dt=dt, num_worlds=num_worlds,
                     config=rg.SolverConfig(rotation_order=order))
 
 

@@ -7,18 +7,17 @@ import pytest
 import rigid_gym as rg
 from rigid_gym import quaternion as quat
 from rigid_gym.meshes import l_shape_mesh
+from rigid_gym.report import scenes
+from rigid_gym.report.scenes import cube_stack, pyramid
 
 G = 9.81
-H = 0.05  # half edge of the test cubes, m
+H = scenes.CUBE_HALF  # half edge of the test cubes, m
 
 
 def apexes(e, dt, count, h0=1.0, r=0.05):
     """Apex heights (m, above the ground) of a ball dropped from h0 and the largest total
     energy gain seen (J)."""
-    scene = rg.Scene()
-    scene.add_ground(restitution=e, friction=0.0)
-    scene.add_body(rg.Sphere(r), mass=1.0, position=(0, 0, h0 + r), restitution=e, friction=0.0)
-    world = rg.World(scene, dt=dt)
+    world = rg.World(scenes.dropped_ball(e, h0, r), dt=dt)
     e0 = world.kinetic_energy() + world.potential_energy()
     found, gain, previous = [], 0.0, 0.0
     while len(found) < count:
@@ -64,10 +63,7 @@ def test_slide_to_stop(mu, v0):
     d = dt (N v0 - a dt N (N + 1) / 2) (about v0^2/(2 mu g) - v0 dt/2). Afterwards at rest:
     drift below 1e-6 m over 10 s."""
     dt = 1 / 240
-    scene = rg.Scene()
-    scene.add_ground(friction=mu)
-    scene.add_body(rg.Box((H, H, H)), mass=1.0, friction=mu, position=(0, 0, H), velocity=(v0, 0, 0))
-    world = rg.World(scene, dt=dt)
+    world = rg.World(scenes.sliding_box(mu, v0), dt=dt)
     world.step(int(2 * v0 / (mu * G) / dt) + 10)
     distance = world.position[1, 0]
     exact = v0 ** 2 / (2 * mu * G)
@@ -81,13 +77,7 @@ def test_slide_to_stop(mu, v0):
 
 
 def incline_world(theta_deg, mu, dt=1 / 240):
-    theta = np.radians(theta_deg)
-    q = np.array([np.cos(theta / 2), 0.0, np.sin(theta / 2), 0.0])  # tilt about y
-    normal = quat.rotate(q, np.array([0.0, 0.0, 1.0]))
-    scene = rg.Scene()
-    scene.add_body(rg.Plane(), static=True, orientation=q, friction=mu, name="incline")
-    scene.add_body(rg.Box((H, H, H)), mass=1.0, friction=mu, position=normal * H, orientation=q)
-    return rg.World(scene, dt=dt), theta
+    return rg.World(scenes.incline(theta_deg, mu), dt=dt), np.radians(theta_deg)
 
 
 def test_incline_sticks_when_tan_theta_below_mu():
@@ -114,10 +104,7 @@ def test_incline_slides_at_g_sin_minus_mu_cos(theta_deg):
 def test_sliding_sphere_ends_rolling_at_five_sevenths(v0):
     """A sphere launched sliding without spin: friction slows it and spins it up until it rolls,
     at 5/7 v0 (angular momentum about the contact point is conserved); within 1%."""
-    scene = rg.Scene()
-    scene.add_ground(friction=0.3)
-    scene.add_body(rg.Sphere(0.05), mass=1.0, friction=0.3, position=(0, 0, 0.05), velocity=(v0, 0, 0))
-    world = rg.World(scene, dt=1 / 240)
+    world = rg.World(scenes.sliding_sphere(v0, friction=0.3, radius=0.05), dt=1 / 240)
     world.step(720)
     assert world.velocity[1, 0] == pytest.approx(5 / 7 * v0, rel=0.01)
     assert world.angular_velocity[1, 1] * 0.05 == pytest.approx(world.velocity[1, 0], rel=1e-9)
@@ -135,15 +122,6 @@ def test_equal_spheres_head_on_elastic_swap_velocities():
     assert world.kinetic_energy() == pytest.approx(e0, rel=1e-12)
 
 
-def cube_stack(n, masses=None, mu=0.5):
-    scene = rg.Scene()
-    scene.add_ground(friction=mu)
-    for k in range(n):
-        scene.add_body(rg.Box((H, H, H)), mass=1.0 if masses is None else masses[k], friction=mu,
-                       position=(0, 0, H + 2 * H * k))
-    return scene
-
-
 def test_ten_cube_stack_stands_still():
     """Edge 0.1 m, mu 0.5, dt 1/240, 10 s: top cube moves < 1 mm, penetration < 2% of the edge
     (measured: 0 m and 1e-16 m)."""
@@ -152,16 +130,6 @@ def test_ten_cube_stack_stands_still():
     world.step(2400)
     assert np.linalg.norm(world.position[10] - top) < 1e-3
     assert world.contacts().depth.max(initial=0.0) < 0.02 * 2 * H
-
-
-def pyramid(rows):
-    scene = rg.Scene()
-    scene.add_ground(friction=0.5)
-    for r in range(rows):
-        for k in range(rows - r):
-            x = (k - (rows - r - 1) / 2) * 2 * H
-            scene.add_body(rg.Box((H, H, H)), mass=1.0, friction=0.5, position=(x, 0, H + 2 * H * r))
-    return scene
 
 
 def test_box_resting_on_two_boxes_holds():

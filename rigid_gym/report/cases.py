@@ -1,0 +1,223 @@
+"""Closed-form cases of the accuracy report: a scene, the exact answer, and how far a run is
+from it.
+
+Each :class:`Case` builds its scene (``rigid_gym.report.scenes``), and ``measure`` steps a
+fresh :class:`rigid_gym.World` of it and returns one error per metric (dimensionless relative
+errors unless the metric's unit says m). ``settings`` are the solver variants swept, as
+``SolverConfig`` overrides of ``SolverConfig.for_scene``: the pass counts and the rotation
+order where they can change the answer.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+import rigid_gym as rg
+from rigid_gym import analytic
+from rigid_gym.report import scenes
+from rigid_gym.report.scenes import G
+
+PASS_SETTINGS = {"default": {}, "2 contact passes": {"contact_passes": 2}}
+BOUNCE_SETTINGS = {**PASS_SETTINGS, "1 collision pass": {"collision_passes": 1}}
+ROTATION_SETTINGS = {f"rotation order {k}": {"rotation_order": k} for k in (1, 2, 3)}
+
+
+@dataclass(frozen=True)
+class Case:
+    """One closed-form case.
+
+    key: short identifier (file names). title: what is simulated. exact: the closed form, as
+    text. metrics: name of each error ``measure`` returns, with its unit. build: () -> Scene.
+    measure: (World) -> tuple of errors, one per metric (NaN when the run could not produce
+    the quantity, e.g. a bounce never seen). settings: label -> SolverConfig overrides.
+    note: what to know when reading the case's numbers (printed under the table).
+    """
+
+    key: str
+    title: str
+    exact: str
+    metrics: tuple[str, ...]
+    build: Callable[[], rg.Scene]
+    measure: Callable[[rg.World], tuple[float, ...]]
+    settings: dict[str, dict]
+    note: str = ""
+
+
+# -- exact answers and the errors against them ----------------------------------------------
+
+FREE_FALL_SECONDS = 1.0
+
+
+def free_fall_error(world: rg.World) -> tuple[float]:
+    """|x(T) - x0 - v0 T - g T^2/2| / |g T^2/2| after T = 1 s of flight."""
+    body = world.scene.bodies[0]
+    world.step(int(round(FREE_FALL_SECONDS / world.dt)))
+    exact, _ = analytic.free_fall_continuous(body.position, body.velocity, world.scene.gravity,
+                                             world.time)
+    scale = 0.5 * np.linalg.norm(world.scene.gravity) * world.time ** 2
+    return (float(np.linalg.norm(world.position[0] - exact) / scale),)
+
+
+BOUNCE_HEIGHT = 1.0  # m, drop height of the lowest point
+BOUNCES = 3
+
+
+def apex_heights(world: rg.World, count: int, radius: float, limit: float) -> np.ndarray:
+    """Heights (m) of the ball's lowest point (body 1) at its first ``count`` apexes (where
+    v_z turns from > 0 to <= 0), searching at most ``limit`` s; fewer if not all were seen."""
+    found, previous = [], 0.0
+    while len(found) < count and world.time < limit:
+        world.step()
+        v = world.velocity[1, 2]
+        if previous > 0.0 >= v:
+            found.append(world.position[1, 2] - radius)
+        previous = v
+    return np.array(found)
+
+
+def bounce_error(apexes: np.ndarray, restitution: float, height: float, count: int) -> float:
+    """max_k |apex_k / (e^(2k) h0) - 1| over the first ``count`` apexes; NaN if fewer seen."""
+    if len(apexes) < count:
+        return float("nan")
+    expected = height * restitution ** (2 * np.arange(1, count + 1))
+    return float(np.max(np.abs(apexes / expected - 1.0)))
+
+
+def bounce_case(restitution: float) -> Case:
+    def measure(world):
+        # each bounce lasts 2 sqrt(2 h / g); allow twice the total before giving up
+        flight = 2 * np.sqrt(2 * BOUNCE_HEIGHT / G) * np.sum(restitution ** np.arange(BOUNCES))
+        apexes = apex_heights(world, BOUNCES, world.scene.bodies[1].shape.radius, 2 * flight)
+        return (bounce_error(apexes, restitution, BOUNCE_HEIGHT, BOUNCES),)
+
+    return Case(f"bounce_e{restitution:g}".replace(".", ""),
+                f"ball dropped from {BOUNCE_HEIGHT:g} m, e = {restitution:g}",
+                "apex k = e^(2k) h0", ("apex height, max relative error over 3 bounces",),
+                lambda: scenes.dropped_ball(restitution, BOUNCE_HEIGHT), measure,
+                BOUNCE_SETTINGS,
+                "the reflection uses the velocity before the impact step's gravity, an "
+                "O(g dt / v_impact) error per bounce whose size depends on where the impact "
+                "falls within a step, so errors scatter about a first-order trend; the third "
+                "apex (e^6 h0 = 1.6 cm at e = 0.5) dominates." if restitution < 1 else
+                "every bounce loses 2 g dt / v_impact of its height (notes/physics.md), first "
+                "order; energy never grows.")
+
+
+SLIDE_MU, SLIDE_SPEED = 0.5, 2.0
+
+
+def slide_error(world: rg.World) -> tuple[float]:
+    """|d - v0^2 / (2 mu g)| / (v0^2 / (2 mu g)) once the box has stopped."""
+    exact = SLIDE_SPEED ** 2 / (2 * SLIDE_MU * G)
+    world.step(int(2 * SLIDE_SPEED / (SLIDE_MU * G) / world.dt) + 10)
+    return (abs(world.position[1, 0] - exact) / exact,)
+
+
+INCLINE_MU = 0.5
+
+
+def incline_slide_error(world: rg.World) -> tuple[float]:
+    """|a - g (sin theta - mu cos theta)| / that, a from the velocity change between t = 0.5
+    and 1 s (theta = 30 deg, tan theta > mu: sliding)."""
+    theta = np.radians(30.0)
+    half = int(round(0.5 / world.dt))
+    world.step(half)
+    v0 = world.velocity[1].copy()
+    world.step(half)
+    a = np.linalg.norm(world.velocity[1] - v0) / (half * world.dt)
+    exact = G * (np.sin(theta) - INCLINE_MU * np.cos(theta))
+    return (abs(a - exact) / exact,)
+
+
+def incline_stick_error(world: rg.World) -> tuple[float]:
+    """Distance (m) the block creeps between t = 1 and 2 s (theta = 20 deg, tan theta < mu:
+    the exact answer is 0)."""
+    second = int(round(1.0 / world.dt))
+    world.step(second)
+    start = world.position[1].copy()
+    world.step(second)
+    return (float(np.linalg.norm(world.position[1] - start)),)
+
+
+ROLL_SPEED = 2.0
+
+
+def rolling_error(world: rg.World) -> tuple[float]:
+    """|v - 5/7 v0| / (5/7 v0) after 1 s (rolling starts at 2 v0 / (7 mu g) = 0.19 s)."""
+    world.step(int(round(1.0 / world.dt)))
+    return (abs(world.velocity[1, 0] / (5 / 7 * ROLL_SPEED) - 1.0),)
+
+
+TOP_MOMENTS = (1.0, 2.0, 3.0)  # kg m^2
+TOP_OMEGA = (0.3, 0.0, 1.0)  # rad/s, body frame, on the omega_2 = 0 section
+TOP_SECONDS = 10.0
+
+
+def torque_free_errors(world: rg.World) -> tuple[float, float, float]:
+    """Over 10 s: max |omega_body - exact| / |omega0| (Jacobi elliptic functions), max
+    |E / E0 - 1|, and the relative error of the mean time between reversals of omega_2 (the
+    intermediate-axis flip, 2 K(m) / lambda = 3.17 s; reversals found by linear interpolation
+    between steps)."""
+    steps = int(round(TOP_SECONDS / world.dt))
+    times = world.dt * np.arange(1, steps + 1)
+    exact = analytic.torque_free_angular_velocity(TOP_MOMENTS, TOP_OMEGA, times)
+    e0 = world.kinetic_energy()
+    omega = np.empty((steps, 3))
+    energy = 0.0
+    for k in range(steps):
+        world.step()
+        omega[k] = world.rotation[0].T @ world.angular_velocity[0]
+        energy = max(energy, abs(world.kinetic_energy() / e0 - 1.0))
+    omega_error = np.abs(omega - exact).max() / np.linalg.norm(TOP_OMEGA)
+    w2 = omega[:, 1]
+    sign_change = np.nonzero(np.sign(w2[:-1]) != np.sign(w2[1:]))[0]
+    crossings = times[sign_change] - w2[sign_change] * world.dt / (w2[sign_change + 1]
+                                                                   - w2[sign_change])
+    period = analytic.torque_free_flip_period(TOP_MOMENTS, TOP_OMEGA)
+    flip = abs(crossings[-1] / len(crossings) / period - 1.0) if len(crossings) else np.nan
+    return float(omega_error), float(energy), float(flip)
+
+
+STACK_COUNT, STACK_SECONDS = 10, 2.0
+
+
+def stack_drift(world: rg.World) -> tuple[float]:
+    """Largest displacement (m) of any cube of a resting 10-cube stack after 2 s (exact: 0)."""
+    start = world.position.copy()
+    world.step(int(round(STACK_SECONDS / world.dt)))
+    return (float(np.abs(world.position - start).max()),)
+
+
+CASES = (
+    Case("free_fall", "ball in free flight for 1 s", "x0 + v0 t + g t^2 / 2",
+         ("position, relative error",), scenes.free_ball, free_fall_error, {"default": {}}),
+    bounce_case(0.5),
+    bounce_case(1.0),
+    Case("slide", f"cube sliding at {SLIDE_SPEED:g} m/s, mu = {SLIDE_MU:g}",
+         "stops after v0^2 / (2 mu g)", ("slide distance, relative error",),
+         lambda: scenes.sliding_box(SLIDE_MU, SLIDE_SPEED), slide_error, PASS_SETTINGS,
+         "the discrete answer is v0^2 / (2 mu g) - v0 dt / 2 (positions use the new velocity), "
+         "so the error is first order and equals v0 dt / 2 to round-off."),
+    Case("incline_slide", f"cube on a 30 deg incline, mu = {INCLINE_MU:g}",
+         "slides at a = g (sin theta - mu cos theta)", ("acceleration, relative error",),
+         lambda: scenes.incline(30.0, INCLINE_MU), incline_slide_error, PASS_SETTINGS),
+    Case("incline_stick", f"cube on a 20 deg incline, mu = {INCLINE_MU:g}",
+         "sticks (tan theta < mu): creep 0", ("creep over 1 s, m",),
+         lambda: scenes.incline(20.0, INCLINE_MU), incline_stick_error, PASS_SETTINGS),
+    Case("rolling", f"sphere launched sliding at {ROLL_SPEED:g} m/s, mu = 0.3",
+         "ends rolling at 5/7 v0", ("final speed, relative error",),
+         lambda: scenes.sliding_sphere(ROLL_SPEED), rolling_error, PASS_SETTINGS),
+    Case("torque_free", "torque-free body, I = (1, 2, 3) kg m^2, omega0 = (0.3, 0, 1) rad/s, 10 s",
+         "Jacobi elliptic functions (Landau-Lifshitz §37)",
+         ("body angular velocity, max relative error", "energy, max relative error",
+          "flip period, relative error"),
+         lambda: scenes.spinning_body(TOP_MOMENTS, TOP_OMEGA), torque_free_errors,
+         ROTATION_SETTINGS),
+    Case("stack_drift", f"{STACK_COUNT}-cube stack resting for {STACK_SECONDS:g} s", "at rest: drift 0",
+         ("largest displacement, m",), lambda: scenes.cube_stack(STACK_COUNT), stack_drift,
+         {**PASS_SETTINGS, "no shock propagation": {"shock_sweeps": 0}}),
+)
+"""Every closed-form case of the accuracy report, in report order."""

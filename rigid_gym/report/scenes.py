@@ -1,0 +1,123 @@
+"""The standard scenes shared by the tests, the benchmarks and the report.
+
+Every builder returns a fresh :class:`rigid_gym.Scene` (SI units, z up, gravity -9.81 m/s^2
+unless stated). Cubes have half edge ``CUBE_HALF`` = 0.05 m (0.1 m edge).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+import rigid_gym as rg
+from rigid_gym import quaternion as quat
+
+G = 9.81
+"""Magnitude of gravity, m/s^2."""
+CUBE_HALF = 0.05
+"""Half edge of the standard cube, m."""
+
+
+def dropped_ball(restitution: float, height: float = 1.0, radius: float = 0.05) -> rg.Scene:
+    """A 1 kg frictionless sphere whose lowest point is ``height`` (m) above the ground, both
+    with ``restitution`` (a pair uses the larger)."""
+    scene = rg.Scene()
+    scene.add_ground(restitution=restitution, friction=0.0)
+    scene.add_body(rg.Sphere(radius), mass=1.0, position=(0, 0, height + radius),
+                   restitution=restitution, friction=0.0)
+    return scene
+
+
+def free_ball(height: float = 10.0, velocity=(1.0, 0.0, 5.0)) -> rg.Scene:
+    """A 1 kg sphere in free flight (no ground) from ``height`` (m) with ``velocity`` (3,) m/s."""
+    scene = rg.Scene()
+    scene.add_body(rg.Sphere(0.05), mass=1.0, position=(0, 0, height), velocity=velocity)
+    return scene
+
+
+def sliding_box(friction: float, speed: float, half_extents=(CUBE_HALF,) * 3) -> rg.Scene:
+    """A 1 kg box (default the standard cube) resting on the ground, launched along +x at
+    ``speed`` (m/s)."""
+    scene = rg.Scene()
+    scene.add_ground(friction=friction)
+    scene.add_body(rg.Box(half_extents), mass=1.0, friction=friction,
+                   position=(0, 0, half_extents[2]), velocity=(speed, 0, 0))
+    return scene
+
+
+def incline(theta_deg: float, friction: float, half_extents=(CUBE_HALF,) * 3) -> rg.Scene:
+    """A 1 kg box (default the standard cube) at rest on a static plane tilted by
+    ``theta_deg`` (degrees) about y; the plane is body 0, the box body 1."""
+    theta = np.radians(theta_deg)
+    q = np.array([np.cos(theta / 2), 0.0, np.sin(theta / 2), 0.0])
+    normal = quat.rotate(q, np.array([0.0, 0.0, 1.0]))
+    scene = rg.Scene()
+    scene.add_body(rg.Plane(), static=True, orientation=q, friction=friction, name="incline")
+    scene.add_body(rg.Box(half_extents), mass=1.0, friction=friction,
+                   position=normal * half_extents[2], orientation=q)
+    return scene
+
+
+def sliding_sphere(speed: float, friction: float = 0.3, radius: float = 0.05) -> rg.Scene:
+    """A 1 kg sphere on the ground launched along +x at ``speed`` (m/s) without spin."""
+    scene = rg.Scene()
+    scene.add_ground(friction=friction)
+    scene.add_body(rg.Sphere(radius), mass=1.0, friction=friction, position=(0, 0, radius),
+                   velocity=(speed, 0, 0))
+    return scene
+
+
+def spinning_body(moments, omega) -> rg.Scene:
+    """A torque-free body (no gravity) with principal ``moments`` (3,) kg m^2 spinning at
+    ``omega`` (3,) rad/s, body axes = world axes at t = 0."""
+    scene = rg.Scene(gravity=(0.0, 0.0, 0.0))
+    scene.add_body(rg.Box((0.1, 0.2, 0.3)), mass=1.0, inertia=moments, angular_velocity=omega)
+    return scene
+
+
+def cube_stack(count: int, masses=None, friction: float = 0.5) -> rg.Scene:
+    """``count`` cubes resting on each other on the ground (bodies 1..count, bottom first),
+    1 kg each unless ``masses`` (count,) kg is given."""
+    scene = rg.Scene()
+    scene.add_ground(friction=friction)
+    for k in range(count):
+        scene.add_body(rg.Box((CUBE_HALF,) * 3), mass=1.0 if masses is None else masses[k],
+                       friction=friction, position=(0, 0, CUBE_HALF + 2 * CUBE_HALF * k))
+    return scene
+
+
+def pyramid(rows: int) -> rg.Scene:
+    """A pyramid of 1 kg cubes, ``rows`` on the bottom row, each box resting on two
+    (rows (rows + 1) / 2 boxes: 55 for 10 rows)."""
+    scene = rg.Scene()
+    scene.add_ground(friction=0.5)
+    for r in range(rows):
+        for k in range(rows - r):
+            x = (k - (rows - r - 1) / 2) * 2 * CUBE_HALF
+            scene.add_body(rg.Box((CUBE_HALF,) * 3), mass=1.0, friction=0.5,
+                           position=(x, 0, CUBE_HALF + 2 * CUBE_HALF * r))
+    return scene
+
+
+def pile(count: int, seed: int = 0) -> rg.Scene:
+    """``count`` boxes, spheres and capsules (about 5 cm, 500 kg/m^3) in columns of about 8
+    over a walled square pit sized for them, about to fall onto each other. Layers are 9 cm
+    apart, more than the sum of two bodies' bounding radii (4 + 4.3 cm), so nothing overlaps
+    at the start (at 7 cm, randomly turned neighbours started 4.6 mm deep)."""
+    rng = np.random.default_rng(seed)
+    columns = max(1, int(np.ceil(np.sqrt(count / 8))))
+    half = 0.06 * columns
+    scene = rg.Scene()
+    scene.add_ground(friction=0.5)
+    for x, y, hx, hy in ((half + 0.05, 0, 0.05, half + 0.1), (-half - 0.05, 0, 0.05, half + 0.1),
+                         (0, half + 0.05, half + 0.1, 0.05), (0, -half - 0.05, half + 0.1, 0.05)):
+        scene.add_body(rg.Box((hx, hy, 0.5)), position=(x, y, 0.5), static=True)
+    shapes = [rg.Box((0.025, 0.025, 0.025)), rg.Sphere(0.025), rg.Capsule(0.02, 0.02)]
+    for k in range(count):
+        column, layer = k % (columns * columns), k // (columns * columns)
+        x = -half + 0.06 + 0.12 * (column % columns)
+        y = -half + 0.06 + 0.12 * (column // columns)
+        q = rng.normal(size=4)
+        scene.add_body(shapes[k % 3], density=500.0, friction=0.5,
+                       position=(x + rng.uniform(-0.01, 0.01), y + rng.uniform(-0.01, 0.01),
+                                 0.05 + 0.09 * layer), orientation=q / np.linalg.norm(q))
+    return scene

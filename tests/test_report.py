@@ -1,0 +1,99 @@
+"""The accuracy and stability report (rigid_gym.report): the quick report is complete, pass
+criteria can fail, observed orders are fitted right. No wall-clock time is asserted."""
+
+import numpy as np
+import pytest
+
+import rigid_gym as rg
+from rigid_gym import analytic
+from rigid_gym.cli import main
+from rigid_gym.report import cases, peers, scenes, stability
+from rigid_gym.report.accuracy import ROUND_OFF, observed_order
+from rigid_gym.report.scenes import CUBE_HALF
+
+
+@pytest.fixture(scope="module")
+def quick_report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("report")
+    assert main(["report", "--quick", "--out", str(out)]) == 0
+    return out
+
+
+def test_quick_report_writes_every_case_and_its_figures(quick_report):
+    text = (quick_report / "report.md").read_text()
+    for case in cases.CASES:
+        assert case.title in text
+    for name in ("towers", "pyramid", "heavy on light", "fast spinner", "thin rod", "e = 1",
+                 "mu = 0", "mu = 5", "1 cm wall", "dt = 1/1000", "masses 1e-3 to 1e3",
+                 "pile of", "Mass properties", "Solver phases used"):
+        assert name.lower() in text.lower(), name
+    for png in ("work_precision.png", "torque_free.png", "mass_properties.png"):
+        path = quick_report / "images" / "report" / png
+        assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+        assert f"images/report/{png}" in text
+
+
+def test_every_stiff_case_reports_pass_or_fail_with_its_numbers(quick_report):
+    text = (quick_report / "report.md").read_text()
+    rows = [line for line in text.splitlines() if "| PASS |" in line or "| **FAIL** |" in line]
+    assert len(rows) >= 15  # every stiff result has a first row with its verdict
+    failures = [line for line in text.splitlines() if line.startswith("- **")]
+    assert len(failures) == sum("| **FAIL** |" in row for row in rows)
+    assert all("Cause:" in line and "(bound" in line for line in failures)
+
+
+def test_a_doctored_overlap_fails_the_penetration_check():
+    """Cube 2 of a 3-cube tower is started 5 mm inside cube 1: the solver has no position
+    correction, so the overlap persists and must fail the 2 mm (2 % of the edge) bound."""
+    scene = scenes.cube_stack(2)
+    scene.add_body(rg.Box((CUBE_HALF,) * 3), mass=1.0, position=(0, 0, 5 * CUBE_HALF - 0.005))
+    result = stability.resting_case("doctored", "doctored tower", scene, seconds=0.05)
+    depth = next(c for c in result.checks if c.name == "deepest overlap")
+    assert not depth.passed and depth.value == pytest.approx(0.005, abs=1e-3)
+    assert not result.passed
+    honest = stability.resting_case("tower", "tower", scenes.cube_stack(3), seconds=0.05)
+    assert honest.passed
+
+
+def test_checks_fail_on_nan_and_respect_their_direction():
+    assert not stability.Check("x", float("nan"), 1.0, "", "").passed
+    assert stability.Check("x", 0.5, 1.0, "", "").passed
+    assert not stability.Check("x", 0.5, 1.0, "", "", at_least=True).passed
+
+
+def test_observed_order_recovers_synthetic_orders_and_skips_round_off():
+    dts = np.array([1 / 30, 1 / 60, 1 / 120, 1 / 240])
+    assert observed_order(dts, 3.0 * dts ** 2) == pytest.approx(2.0, abs=1e-12)
+    assert observed_order(1 / dts, 0.7 * dts ** 0.5) == pytest.approx(-0.5, abs=1e-12)
+    with_floor = np.array([1e-3, 1.25e-4, ROUND_OFF / 2, 0.0])  # p = 3, then round-off
+    assert observed_order(dts, with_floor) == pytest.approx(3.0, abs=1e-12)
+    assert observed_order(dts, np.zeros(4)) is None
+    with pytest.raises(ValueError, match="equal length"):
+        observed_order(dts, np.ones(3))
+    with pytest.raises(ValueError, match="> 0"):
+        observed_order([0.0, 1.0], [1.0, 2.0])
+
+
+def test_bounce_error_is_nan_when_a_bounce_is_missing():
+    assert np.isnan(cases.bounce_error(np.array([0.25]), 0.5, 1.0, 3))
+    assert cases.bounce_error(np.array([0.25, 0.0625]), 0.5, 1.0, 2) == pytest.approx(0.0)
+
+
+def test_simulate_rejects_a_run_shorter_than_one_step():
+    with pytest.raises(ValueError, match="at least one step"):
+        stability.simulate(rg.World(scenes.cube_stack(1), dt=1 / 240), 1e-4)
+
+
+@pytest.mark.skipif(not peers.available()["pybullet"], reason="pybullet not installed")
+def test_pybullet_adapter_runs_the_same_case_code():
+    """PyBullet integrates free flight by symplectic Euler too, so its error after 1 s equals
+    the discrete closed form's (to 1e-9 relative: PyBullet stores poses in float64 but its
+    solver adds round-off per step)."""
+    case = next(c for c in cases.CASES if c.key == "free_fall")
+    world = peers.PyBulletWorld(case.build(), 1 / 60)
+    (error,) = case.measure(world)
+    body = case.build().bodies[0]
+    x, _ = analytic.free_fall_discrete(body.position, body.velocity, (0, 0, -9.81), 1 / 60, 60)
+    exact, _ = analytic.free_fall_continuous(body.position, body.velocity, (0, 0, -9.81), 1.0)
+    assert error == pytest.approx(np.linalg.norm(x - exact) / (0.5 * 9.81), rel=1e-9)
+    world.close()
