@@ -82,17 +82,18 @@ def main():
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--plots", type=Path, default=Path("docs/images"))
     args = parser.parse_args()
-    print("| task | algorithm | env steps | wall time per seed | seeds | success rate "
-          "(mean ± std over seeds) |")
-    print("|---|---|---|---|---|---|")
+    print("| task | algorithm | env steps | wall time per seed | CPU time per seed | seeds | "
+          "success rate (mean ± std over seeds) |")
+    print("|---|---|---|---|---|---|---|")
     args.plots.mkdir(parents=True, exist_ok=True)
     for env_id, folders in find_runs(args.runs).items():
         metas = [json.loads((f / "run.json").read_text()) for f in folders]
         rates = [evaluate(f / "model.zip", env_id, args.episodes)["success_rate"]
                  for f in folders]
-        minutes = np.mean([m.get("wall_seconds", np.nan) for m in metas]) / 60
+        wall, cpu = (np.mean([m.get(key, np.nan) for m in metas]) / 60
+                     for key in ("wall_seconds", "cpu_seconds"))
         print(f"| {env_id} | {method(metas[0])} | {env_steps(metas[0])} | "
-              f"{minutes:.0f} min | {len(folders)} | {np.mean(rates):.0%} ± "
+              f"{wall:.0f} min | {cpu:.0f} min | {len(folders)} | {np.mean(rates):.0%} ± "
               f"{np.std(rates):.0%} ({', '.join(f'{r:.0%}' for r in rates)}) |", flush=True)
         with_curves = [f for f in folders if (f / "evaluations.csv").is_file()]
         if with_curves:

@@ -8,7 +8,8 @@
 A run writes one folder, ``<out>/<task>/<algo>-seed<seed>/``:
 
     model.zip           the final policy (``rigid-gym evaluate`` loads it)
-    run.json            env id, algorithm, seed, budget, settings and the command line
+    run.json            env id, algorithm, seed, budget, settings, the command line, and after
+                        training wall_seconds and cpu_seconds (this process's CPU time)
     evaluations.csv     timesteps, success_rate, mean_return: deterministic episodes on fixed
                         seeds, every ``eval_freq`` steps (the learning curve)
     checkpoints/        model_<steps>_steps.zip every ``checkpoint_freq`` steps (if set)
@@ -126,12 +127,14 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     if checkpoint_freq:
         callbacks.append(CheckpointCallback(checkpoint_freq // n_envs or 1,
                                             str(folder / "checkpoints"), name_prefix="model"))
-    start = time.perf_counter()
+    start, cpu_start = time.perf_counter(), time.process_time()
     model.learn(timesteps, callback=CallbackList(callbacks), progress_bar=progress_bar)
     model.save(folder / "model.zip")
     env.close()
     record = json.loads((folder / "run.json").read_text())
     record["wall_seconds"] = round(time.perf_counter() - start, 1)  # training and evaluations
+    # this process's CPU time: what the run costs whatever else shares the machine
+    record["cpu_seconds"] = round(time.process_time() - cpu_start, 1)
     (folder / "run.json").write_text(json.dumps(record, indent=2))
     return folder
 

@@ -28,6 +28,7 @@ def test_a_short_run_trains_saves_and_evaluates(env_id, tmp_path):
     run = json.loads((folder / "run.json").read_text())
     assert run["env_id"] == env_id and run["algo"] == settings["algo"]
     assert (run["demonstrations"] or {"episodes": 0})["episodes"] == demos
+    assert 0 < run["cpu_seconds"] and 0 < run["wall_seconds"]
     with open(folder / "evaluations.csv") as f:
         rows = list(csv.DictReader(f))
     assert [int(r["timesteps"]) for r in rows] == [steps // 2 * k for k in (1, 2)]
