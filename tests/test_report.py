@@ -97,3 +97,38 @@ def test_pybullet_adapter_runs_the_same_case_code():
     exact, _ = analytic.free_fall_continuous(body.position, body.velocity, (0, 0, -9.81), 1.0)
     assert error == pytest.approx(np.linalg.norm(x - exact) / (0.5 * 9.81), rel=1e-9)
     world.close()
+
+
+def test_mujoco_adapter_runs_the_same_case_code():
+    """MuJoCo's default integrator is semi-implicit Euler, so after 1 s of free flight its
+    error equals the discrete closed form's, g dt T / 2 over g T^2 / 2 = dt (first order);
+    RK4 integrates the quadratic exactly (round-off). Both rebuild their start on reset."""
+    pytest.importorskip("mujoco")
+    case = next(c for c in cases.CASES if c.key == "free_fall")
+    body = case.build().bodies[0]
+    x, _ = analytic.free_fall_discrete(body.position, body.velocity, (0, 0, -9.81), 1 / 60, 60)
+    exact, _ = analytic.free_fall_continuous(body.position, body.velocity, (0, 0, -9.81), 1.0)
+    world = peers.MuJoCoWorld(case.build(), 1 / 60)
+    (error,) = case.measure(world)
+    assert error == pytest.approx(np.linalg.norm(x - exact) / (0.5 * 9.81), rel=1e-9)
+    assert error == pytest.approx(1 / 60, rel=1e-9)
+    world.reset()
+    assert world.steps == 0 and np.allclose(world.position[0], body.position)
+    assert np.allclose(world.velocity[0], body.velocity)
+    (error,) = case.measure(peers.MuJoCoWorld(case.build(), 1 / 60, "RK4"))
+    assert error < ROUND_OFF
+    with pytest.raises(ValueError, match="integrator"):
+        peers.MuJoCoWorld(case.build(), 1 / 60, "Verlet")
+    with pytest.raises(ValueError, match="dt"):
+        peers.MuJoCoWorld(case.build(), 0.0)
+
+
+def test_restitution_maps_to_the_damping_ratio_of_a_spring_damper():
+    """A linear spring-damper of damping ratio zeta rebounds at exp(-zeta pi / sqrt(1 -
+    zeta^2)) times its approach speed: the mapping inverts that."""
+    for e in (0.1, 0.5, 0.9):
+        zeta = peers.damping_ratio(e)
+        assert np.exp(-zeta * np.pi / np.sqrt(1 - zeta ** 2)) == pytest.approx(e, rel=1e-12)
+    assert peers.damping_ratio(1.0) == 0.0 and peers.damping_ratio(0.0) == 1.0
+    with pytest.raises(ValueError, match="restitution"):
+        peers.damping_ratio(1.5)

@@ -7,7 +7,7 @@
 Modules: ``scenes`` (the standard scenes, shared with tests and benchmarks), ``cases``
 (closed-form cases and their exact answers), ``accuracy`` (work-precision sweeps, observed
 orders, mass properties), ``stability`` (stiff and extreme cases with pass criteria), ``peers``
-(the same scenes in PyBullet), ``document`` (markdown and figures).
+(the same scenes in PyBullet and MuJoCo), ``document`` (markdown and figures).
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ the stiff cases' duration scale."""
 
 def generate(out="docs", quick: bool = False, compare: bool = True, log=print) -> Path:
     """Run every measurement and write ``out/report.md`` plus figures; returns its path.
-    compare: also measure the peer engines that are installed (PyBullet)."""
+    compare: also measure the peer engines that are installed (PyBullet, MuJoCo)."""
     sizes = QUICK if quick else FULL
     start = time.perf_counter()
 
@@ -40,10 +40,11 @@ def generate(out="docs", quick: bool = False, compare: bool = True, log=print) -
     for case in cases.CASES:
         progress(f"accuracy: {case.title}")
         curves += accuracy.sweep_case(case, sizes["dts"], sizes["repeats"])
-        if found["pybullet"] and case.key in peers.PEER_CASES:
-            curves.append(accuracy.sweep(case, "PyBullet",
-                                         lambda dt, c=case: peers.PyBulletWorld(c.build(), dt),
-                                         sizes["dts"], sizes["repeats"]))
+        for label, (engine, make) in peers.PEERS.items():
+            if found[engine] and case.key in peers.PEER_CASES:
+                curves.append(accuracy.sweep(case, label,
+                                             lambda dt, c=case, m=make: m(c.build(), dt),
+                                             sizes["dts"], sizes["repeats"]))
         savings[case.key] = accuracy.phase_saving(case, 1 / 240, sizes["repeats"])
     progress("accuracy: mass properties")
     mass = accuracy.sweep_mass_properties(sizes["grid"], sizes["samples"], sizes["repeats"])

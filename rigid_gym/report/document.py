@@ -57,7 +57,13 @@ def dt_label(dt: float) -> str:
 
 # -- figures -------------------------------------------------------------------------------
 
-def _plot_curve(ax, x, y, label, style):
+PEER_STYLES = {"PyBullet": ("s--", None), "MuJoCo": ("^--", "tab:purple"),
+               "MuJoCo RK4": ("v--", "tab:brown")}
+"""Peer curves (``peers.PEERS`` labels): matplotlib format and colour (None: next in the
+cycle); rigid_gym's settings are drawn "o-"."""
+
+
+def _plot_curve(ax, x, y, label, style, color=None):
     """Log-log line through (x, y). Errors at round-off are drawn hollow at the ROUND_OFF
     floor; NaN errors (the run produced no result, e.g. a bounce never seen) are left out
     and named in the label."""
@@ -68,7 +74,7 @@ def _plot_curve(ax, x, y, label, style):
     x, y = x[~missing], y[~missing]
     floored = y <= ROUND_OFF
     shown = np.where(floored, ROUND_OFF, y)
-    line, = ax.loglog(x, shown, style, label=label, markersize=5)
+    line, = ax.loglog(x, shown, style, label=label, markersize=5, color=color)
     if floored.any():
         ax.loglog(x[floored], shown[floored], "o", markersize=9, markerfacecolor="none",
                   color=line.get_color())
@@ -89,10 +95,9 @@ def _log_axes(ax, size: int) -> None:
 def work_precision_panel(ax, case: Case, curves: list[Curve], metric: int) -> None:
     """Error (metric) against wall time per simulated second for every curve of ``case``."""
     for curve in curves:
-        peer = curve.setting.startswith("PyBullet")
+        style, color = PEER_STYLES.get(curve.setting, ("o-", None))
         _plot_curve(ax, curve.cost, curve.errors[:, metric],
-                    f"{curve.setting} (p = {fmt_order(curve.order(metric))})",
-                    "s--" if peer else "o-")
+                    f"{curve.setting} (p = {fmt_order(curve.order(metric))})", style, color)
     first = curves[0]
     for x, y, dt in zip(first.cost, first.errors[:, metric], first.dts):
         if np.isfinite(y):
@@ -186,17 +191,42 @@ def accuracy_section(results: Results) -> list[str]:
     notes = [f"- *{case.title}*: {case.note}" for case in CASES if case.note]
     if notes:
         lines += ["", "Notes:", *notes]
-    peer = ("PyBullet is measured in the same run on the same scenes (dashed curves; "
-            "`rigid_gym.report.peers`: friction and restitution set so the pair values match, "
-            "damping off, restitution at any speed). It was not tuned further: where its "
-            "relative error nears 1 the run lost the effect entirely (its ball stops bouncing "
-            "at small dt with these settings; not investigated). "
-            if results.peers.get("pybullet") else
-            "PyBullet is not installed here (or `--no-compare` was given), so no peer was "
-            "measured (`pip install -e '.[compare]'`). ")
-    mujoco = "installed" if results.peers.get("mujoco") else "not installed here"
-    lines += ["", f"**Peers.** {peer}MuJoCo ({mujoco}) has no adapter yet.", ""]
+    lines += ["", "**Peers.** " + peers_paragraph(results.peers), ""]
     return lines
+
+
+def peers_paragraph(found: dict[str, bool]) -> str:
+    """What the peer curves are and how they were set up; says which engines are absent."""
+    from rigid_gym.report.peers import MUJOCO_TIMECONST
+
+    absent = ("not installed here (or `--no-compare` was given), so it was not measured "
+              "(`pip install -e '.[compare]'`). ")
+    pybullet = ("PyBullet is measured in the same run on the same scenes (dashed curves, "
+                "squares; `rigid_gym.report.peers`: friction and restitution set so the pair "
+                "values match, damping off, restitution at any speed). It was not tuned "
+                "further: where its relative error nears 1 the run lost the effect entirely "
+                "(its ball stops bouncing at small dt with these settings; not investigated). "
+                if found.get("pybullet") else "PyBullet is " + absent)
+    mujoco = ("MuJoCo is measured the same way (dashed curves, triangles; `peers.MuJoCoWorld`: "
+              "the scene written as MJCF by `peers.mjcf`, `mujoco.mj_step` in a Python loop, "
+              "its default semi-implicit Euler integrator and RK4 as a second curve, default "
+              "pyramidal friction cone with the pair's mu, frictionless contacts with condim 1, "
+              "no damping). MuJoCo has no coefficient of restitution: its contacts are soft "
+              "spring-dampers, so e is mapped to the damping ratio zeta = -ln e / sqrt(pi^2 + "
+              "ln^2 e) of a linear spring-damper that rebounds at e times its approach speed "
+              "(zeta = 1 at e = 0, 0 at e = 1), as solref = (-w^2, -2 zeta w) with "
+              f"w = 1 / max({MUJOCO_TIMECONST:g} s, 2 dt) (MuJoCo's default time constant and "
+              "its 2 dt floor). The mapping is approximate (the impedance solimp and the "
+              "integrator change the effective spring), so the bounce errors measure it as "
+              "much as the integration. Soft contacts also sink and creep: the stacked cubes "
+              "settle into their contacts and the block on the 20 deg incline slips slowly "
+              "under static friction, at about the same rate at every dt, so those two errors "
+              "do not fall with dt (a modelling difference, not a step-size error). The cube "
+              "on the 30 deg incline rocks about its pitch axis and hops (its contacts come "
+              "and go) instead of sliding flat, so its acceleration scatters over dt (with "
+              "the elliptic cone too; not investigated). "
+              if found.get("mujoco") else "MuJoCo is " + absent)
+    return pybullet + mujoco
 
 
 def _cost_slope(curve: Curve, metric: int) -> float | None:
