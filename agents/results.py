@@ -76,6 +76,16 @@ def env_steps(run: dict) -> str:
     return f"{run['timesteps']:,}" + (f" + {demos['env_steps']:,} demo" if demos else "")
 
 
+def minutes(runs: list[dict], key: str) -> str:
+    """Mean of ``key`` (seconds) over the runs that recorded it, in minutes; older runs have no
+    cpu_seconds."""
+    known = [run[key] for run in runs if key in run]
+    if not known:
+        return "—"
+    return f"{np.mean(known) / 60:.0f} min" + ("" if len(known) == len(runs)
+                                                 else f" ({len(known)} of {len(runs)} runs)")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("runs", type=Path)
@@ -90,10 +100,9 @@ def main():
         metas = [json.loads((f / "run.json").read_text()) for f in folders]
         rates = [evaluate(f / "model.zip", env_id, args.episodes)["success_rate"]
                  for f in folders]
-        wall, cpu = (np.mean([m.get(key, np.nan) for m in metas]) / 60
-                     for key in ("wall_seconds", "cpu_seconds"))
         print(f"| {env_id} | {method(metas[0])} | {env_steps(metas[0])} | "
-              f"{wall:.0f} min | {cpu:.0f} min | {len(folders)} | {np.mean(rates):.0%} ± "
+              f"{minutes(metas, 'wall_seconds')} | {minutes(metas, 'cpu_seconds')} | "
+              f"{len(folders)} | {np.mean(rates):.0%} ± "
               f"{np.std(rates):.0%} ({', '.join(f'{r:.0%}' for r in rates)}) |", flush=True)
         with_curves = [f for f in folders if (f / "evaluations.csv").is_file()]
         if with_curves:

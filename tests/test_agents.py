@@ -101,7 +101,7 @@ def test_learning_curves_are_grouped_by_env_and_drawn(tmp_path):
 
 
 def test_the_table_names_the_method_and_counts_demonstration_steps():
-    from rigid_gym.agents.results import env_steps, method
+    from rigid_gym.agents.results import env_steps, method, minutes
 
     run = {"algo": "sac", "timesteps": 150_000, "demonstrations": None,
            "kwargs": {"replay_buffer_class": "<class '...her_replay_buffer.HerReplayBuffer'>"}}
@@ -109,3 +109,7 @@ def test_the_table_names_the_method_and_counts_demonstration_steps():
     run["demonstrations"] = {"episodes": 100, "env_steps": 5000, "success_rate": 1.0}
     assert (method(run), env_steps(run)) == ("SAC + HER + 100 demos", "150,000 + 5,000 demo")
     assert method({"algo": "ppo", "kwargs": {}}) == "PPO"
+    runs = [{"cpu_seconds": 600.0}, {"cpu_seconds": 1200.0}, {}]
+    assert minutes(runs[:2], "cpu_seconds") == "15 min"
+    assert minutes(runs, "cpu_seconds") == "15 min (2 of 3 runs)"
+    assert minutes(runs[2:], "cpu_seconds") == "—"
