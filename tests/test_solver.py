@@ -281,3 +281,30 @@ def test_a_cube_pinched_at_rest_between_the_table_and_a_kinematic_pad_stays_fini
     world.step(100)
     assert np.all(np.isfinite(world.position)) and np.all(np.isfinite(world.velocity))
     np.testing.assert_allclose(world.position[cube], start, atol=1e-12)
+
+
+def _inner_box_sinking_into_wall(shock_sweeps: int) -> float:
+    """Two 5 cm boxes on the floor in a row against a static wall, the outer one pushed towards
+    the wall by 5 N for 1 s: how far (m) the inner box ends up inside the wall."""
+    scene = rg.Scene()
+    scene.add_ground(friction=0.5)
+    scene.add_body(rg.Box((0.05, 0.3, 0.3)), position=(0.075, 0, 0.3), static=True)  # face x = 0.025
+    inner = scene.add_body(rg.Box((0.025,) * 3), mass=0.06, position=(-0.0001, 0, 0.025))
+    outer = scene.add_body(rg.Box((0.025,) * 3), mass=0.06, position=(-0.0502, 0, 0.025))
+    world = rg.World(scene, dt=1 / 240,
+                     config=rg.SolverConfig.for_scene(scene, shock_sweeps=shock_sweeps))
+    for _ in range(240):
+        world.apply_force(outer, (5.0, 0.0, 0.0))
+        world.step()
+    return world.position[inner][0]  # its right face, x + 0.025, against the wall's, 0.025
+
+
+def test_a_box_pushed_sideways_into_a_wall_holds_when_the_level_converges():
+    assert _inner_box_sinking_into_wall(shock_sweeps=20) < 1e-6
+
+
+@pytest.mark.xfail(strict=True, reason="known failure (docs/report.md, pile): with 2 shock "
+                   "sweeps the pairwise impulses inside a level push the inner box ~3 mm into "
+                   "the wall in 1 s; xpasses once the level is resolved to convergence")
+def test_a_box_pushed_sideways_into_a_wall_holds_with_the_default_sweeps():
+    assert _inner_box_sinking_into_wall(shock_sweeps=2) < 1e-4

@@ -431,16 +431,21 @@ KNOWN_CAUSES = {
         "contact phase aim for a small separating velocity proportional to the predicted "
         "overlap (a Baumgarte-style bias), or project positions after the step."),
     "pile": (
-        "partly diagnosed. Overlap is made while bodies land on each other, because the "
+        "Overlap is made while bodies land on each other, because the "
         "contact phase has not converged after its 10 passes (100-body pile, first 100 steps: "
         "deepest 4.9 mm with 10 passes, 2.6 mm with 40; 8 shock sweeps instead of 2 change "
         "nothing, 5.1 mm), and once made it is never removed (as for the thin rod): over 0.4 s "
         "the deepest is 4.9 mm at dt = 1/240 and 0.8 mm at 1/960. On the 1000-body pile (measured at 1 s) 76 contact points are deeper than "
         "2 mm; the deepest, 19.5 mm, is a 5 cm box that the pile presses sideways into a "
         "static wall, sinking ~0.2 mm per step from 0.6 s on; pairs of moving bodies reach "
-        "9.7 mm (two capsules). Why a sideways load keeps pushing a box into a static wall is "
-        "not yet diagnosed (a hypothesis, unchecked: shock propagation orders bodies along "
-        "gravity, so a sideways contact with a wall never gets the frozen-support treatment). "
+        "9.7 mm (two capsules). The box sinks into the wall because, within one level, shock "
+        "propagation resolves each body against its frozen supports (the wall, the ground) "
+        "and then the pairs inside the level, and after its 2 sweeps the last pairwise impulse "
+        "leaves the box moving into the wall. Reproduced with two 5 cm boxes on the floor "
+        "beside a wall, the outer one pushed by 5 N (tests/test_solver.py): the inner one sinks "
+        "3.1 mm in 1 s with 2 sweeps, not at all with 20 sweeps or with 40 contact passes; at "
+        "50 N it goes through the 10 cm wall. A fix: end each sweep with the frozen supports, "
+        "or iterate the level to convergence. "
         "(The pile used to start with 4.6 mm overlaps, its layers 7 cm apart; now 9 cm.)"),
 }
 """Diagnosed causes of cases that fail, shown in the report next to the failure (a case that
