@@ -3,6 +3,7 @@
     import gymnasium as gym
     import rigid_gym
     env = gym.make("rigid_gym/Push-v0")          # or Stack, Throw; ...Dense-v0 for -distance
+    envs = gym.make_vec("rigid_gym/Push-v0", num_envs=256)   # natively batched (envs/vector.py)
 
 ``ENV_IDS`` lists every id. Entry points are strings, so registering imports no task module.
 """
@@ -20,6 +21,7 @@ def _register() -> list[str]:
             env_id = f"rigid_gym/{task}{suffix}-v0"
             if env_id not in gym.registry:
                 gym.register(env_id, entry_point=f"rigid_gym.envs.{task.lower()}:{task}Env",
+                             vector_entry_point=f"rigid_gym.envs.vector:{task.lower()}",
                              max_episode_steps=steps, kwargs={"reward_type": reward_type})
             ids.append(env_id)
     return ids

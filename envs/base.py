@@ -22,7 +22,7 @@ from gymnasium.error import ResetNeeded
 
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Box
-from rigid_gym.world import World
+from rigid_gym.world import World, WorldView
 from rigid_gym.envs.effector import SuctionGripper, Workspace
 
 STEP_TIME = 0.04
@@ -122,7 +122,8 @@ class RigidGymEnv(gym.Env):
         })
         self.action_space = spaces.Box(-1.0, 1.0, shape=(3 + int(self.has_grip),),
                                        dtype=np.float32)
-        self.world: World | None = None
+        self.world: World | WorldView | None = None
+        self.batch: WorldView | None = None  # set by a vector env: this env's world in its batch
         self.gripper: SuctionGripper | None = None
         self.goal = np.zeros(self.goal_size)
         self._renderer = None
@@ -153,7 +154,11 @@ class RigidGymEnv(gym.Env):
                                  friction=friction[-2], name="gripper")
         self._add_fixtures(scene)
         self.scene = scene
-        self.world = World(scene, dt=STEP_TIME / SOLVER_STEPS)
+        if self.batch is None:
+            self.world = World(scene, dt=STEP_TIME / SOLVER_STEPS)
+        else:  # a vector env's world: same bodies, new poses and materials
+            self.batch.batch.load(scene, self.batch.index)
+            self.world = self.batch
         self.cubes = cubes
         self.gripper = SuctionGripper(self.world, gripper, cubes, [(h, h, h) for h in half],
                                       STEP_TIME, Workspace())
@@ -163,6 +168,17 @@ class RigidGymEnv(gym.Env):
         return observation, {"is_success": self._is_success(observation)}
 
     def step(self, action):
+        self.act(action)
+        if self.gripper.held is None:
+            self.world.step(SOLVER_STEPS)  # one call: nothing to carry between solver steps
+        else:
+            for _ in range(SOLVER_STEPS):
+                self.world.step(1)
+                self.gripper.carry()
+        return self.outcome()
+
+    def act(self, action) -> None:
+        """The first half of ``step``: check ``action`` and command the gripper with it."""
         if self.world is None:
             raise ResetNeeded(f"{type(self).__name__}.step: call reset() before step()")
         action = np.asarray(action, dtype=np.float64)
@@ -174,12 +190,10 @@ class RigidGymEnv(gym.Env):
                              f"are refused), got {action.tolist()}")
         action = np.clip(action, -1.0, 1.0)  # documented: outside [-1, 1] is clipped
         self.gripper.command(action[:3], action[3] if self.has_grip else None)
-        if self.gripper.held is None:
-            self.world.step(SOLVER_STEPS)  # one call: nothing to carry between solver steps
-        else:
-            for _ in range(SOLVER_STEPS):
-                self.world.step(1)
-                self.gripper.carry()
+
+    def outcome(self):
+        """The second half of ``step``, once the solver has run SOLVER_STEPS steps: the step's
+        (observation, reward, terminated, truncated, info)."""
         observation = self._observation()
         success = self._is_success(observation)
         info = {"is_success": success}

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from rigid_gym.envs.base import MARKER_ALPHA, RigidGymEnv
@@ -22,8 +24,10 @@ IN_BIN_HEIGHT = 0.05
 BIN_FRICTION = 0.5
 
 
+@functools.cache
 def bin_shape() -> Compound:
-    """Four walls around a square of side 2 BIN_INNER_HALF; frame at the centre, on the table."""
+    """Four walls around a square of side 2 BIN_INNER_HALF; frame at the centre, on the table.
+    One shared (immutable) shape, so that a vector env's copies can share its geometry."""
     t, h = BIN_WALL
     a = BIN_INNER_HALF + t
     parts = []

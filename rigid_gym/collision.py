@@ -15,6 +15,7 @@ from rigid_gym.geometry import Geometry
 from rigid_gym.kernels.broadphase import find_pairs
 from rigid_gym.kernels.contacts import detect_contacts
 from rigid_gym.kernels.jit import for_worlds
+from rigid_gym.kernels.step import Pairs
 
 SWEEP_MIN_BODIES = 64
 """Bounded bodies from which sort-and-sweep beats brute force (benchmarks/collision.py)."""
@@ -51,16 +52,31 @@ class Collider:
         bounded = int(np.count_nonzero(geometry.body_unbounded == 0))
         self.sweep = bounded >= SWEEP_MIN_BODIES if sweep is None else bool(sweep)
         self.bounds = np.zeros((num_worlds, n, 6))
+        self.order = np.tile(np.arange(n, dtype=np.int64), (num_worlds, 1))
         self.pair_count = np.zeros(num_worlds, dtype=np.int32)
         self.contact_count = np.zeros(num_worlds, dtype=np.int32)
         self._allocate_pairs(max(8, 2 * n))
         self._allocate_contacts(64)
+
+    @property
+    def pairs(self) -> Pairs:
+        """The broad phase's buffers as the step kernels take them."""
+        return Pairs(self.bounds, self.order, self.pair_a, self.pair_b, self.pair_count,
+                     self.pair_impulse, self.keys, self.tmp)
+
+    def grow_pairs(self) -> None:
+        """Make room for at least the pairs the last broad phase found (pair_count)."""
+        needed = int(self.pair_count.max(initial=0))
+        if needed > self.pair_a.shape[1]:
+            self._allocate_pairs(2 * needed)
 
     def _allocate_pairs(self, capacity: int) -> None:
         b = len(self.pair_count)
         self.pair_a = np.zeros((b, capacity), dtype=np.int32)
         self.pair_b = np.zeros((b, capacity), dtype=np.int32)
         self.pair_impulse = np.zeros((b, capacity, 3))  # the solver's per-step totals, N s
+        self.keys = np.zeros((b, capacity), dtype=np.int64)
+        self.tmp = np.zeros((b, capacity), dtype=np.int64)
 
     def _allocate_contacts(self, capacity: int) -> None:
         b = len(self.contact_count)
@@ -70,38 +86,50 @@ class Collider:
         self.normal = np.zeros((b, capacity, 3))
         self.depth = np.zeros((b, capacity))
 
-    def find_pairs(self, state, margin: float, dt: float = 0.0, acceleration: float = 0.0) -> None:
+    def find_pairs(self, state, margin: float, dt: float = 0.0, acceleration: float = 0.0,
+                   worlds=slice(None)) -> None:
         """Fill pair_a/pair_b/pair_count with the pairs that may touch within dt (s) of the
         state's poses (a ``world.State``), boxes grown by margin (m) and by how far the bodies
-        can move in dt under an acceleration bound (m/s^2)."""
-        pairs = for_worlds(find_pairs, len(self.pair_count))
+        can move in dt under an acceleration bound (m/s^2); for ``worlds`` (a slice)."""
+        part = type(state)(*(a[worlds] for a in state))
+        pairs = for_worlds(find_pairs, len(range(*worlds.indices(len(self.pair_count)))))
         while True:
-            pairs(state.position, state.rotation, state.velocity, state.angular_velocity,
-                  self.motion, self.geometry, margin, dt, acceleration, self.sweep, self.bounds,
-                  self.pair_a, self.pair_b, self.pair_count)
-            needed = int(self.pair_count.max(initial=0))
-            if needed <= self.pair_a.shape[1]:
+            pairs(part.position, part.rotation, part.velocity, part.angular_velocity,
+                  self.motion, self.geometry, margin, dt, acceleration, self.sweep,
+                  self.bounds[worlds], self.order[worlds], self.pair_a[worlds],
+                  self.pair_b[worlds], self.pair_count[worlds], self.keys[worlds],
+                  self.tmp[worlds])
+            if int(self.pair_count[worlds].max(initial=0)) <= self.pair_a.shape[1]:
                 return
-            self._allocate_pairs(2 * needed)
+            self.grow_pairs()
 
-    def detect(self, state, margin: float = 0.0) -> None:
+    def detect(self, state, margin: float = 0.0, worlds=slice(None)) -> None:
         """Fill the contact buffers for the state's current poses (contacts deeper than -margin,
-        m)."""
-        self.find_pairs(state, margin)
-        detect = for_worlds(detect_contacts, len(self.pair_count))
+        m), of ``worlds`` (a slice, or one world's index)."""
+        if not isinstance(worlds, slice):
+            worlds = slice(worlds, worlds + 1)
+        self.find_pairs(state, margin, worlds=worlds)
+        part = type(state)(*(a[worlds] for a in state))
+        detect = for_worlds(detect_contacts, len(range(*worlds.indices(len(self.pair_count)))))
         while True:
-            detect(state.position, state.rotation, self.geometry, self.pair_a, self.pair_b,
-                   self.pair_count, margin, self.body_a, self.body_b, self.point, self.normal,
-                   self.depth, self.contact_count)
-            needed = int(self.contact_count.max(initial=0))
+            detect(part.position, part.rotation, self.geometry, self.pair_a[worlds],
+                   self.pair_b[worlds], self.pair_count[worlds], margin, self.body_a[worlds],
+                   self.body_b[worlds], self.point[worlds], self.normal[worlds],
+                   self.depth[worlds], self.contact_count[worlds])
+            needed = int(self.contact_count[worlds].max(initial=0))
             if needed <= self.depth.shape[1]:
                 return
             self._allocate_contacts(2 * needed)
 
-    def contacts(self) -> Contacts:
-        """The last ``detect`` result as flat arrays (copies)."""
-        rows = [np.arange(c) for c in self.contact_count]
-        world = np.concatenate([np.full(c, w, dtype=np.int32) for w, c in enumerate(self.contact_count)])
-        pick = lambda arr: np.concatenate([arr[w, r] for w, r in enumerate(rows)])  # noqa: E731
+    def contacts(self, worlds=slice(None), first: int = 0) -> Contacts:
+        """The last ``detect`` result of ``worlds`` as flat arrays (copies); world indices
+        count from ``first``."""
+        if not isinstance(worlds, slice):
+            worlds = slice(worlds, worlds + 1)
+        counts = self.contact_count[worlds]
+        rows = [np.arange(c) for c in counts]
+        world = np.concatenate([np.full(c, first + w, dtype=np.int32)
+                                for w, c in enumerate(counts)])
+        pick = lambda arr: np.concatenate([arr[worlds][w, r] for w, r in enumerate(rows)])  # noqa: E731
         return Contacts(world, pick(self.body_a), pick(self.body_b), pick(self.point),
                         pick(self.normal), pick(self.depth))

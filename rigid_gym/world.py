@@ -12,6 +12,7 @@ which validate their input.
 
 from __future__ import annotations
 
+import dataclasses
 from typing import NamedTuple
 
 import numpy as np
@@ -25,6 +26,7 @@ from rigid_gym.kernels import integrate
 from rigid_gym.kernels.integrate import DYNAMIC, STATIC
 from rigid_gym.kernels.jit import calling_thread_only, for_worlds
 from rigid_gym.scene import Scene
+from rigid_gym.shapes import Compound, Mesh
 
 
 class State(NamedTuple):
@@ -70,10 +72,12 @@ class World:
     num_worlds: None for one world (arrays without the world axis) or B >= 1 identical copies
         stepped together (arrays with a leading axis of length B).
     config: a SolverConfig; default ``SolverConfig.for_scene(scene)``.
+    profile: True steps phase by phase and times each phase (``World.profile()``); False
+        (default) runs all of a ``step(n)`` call in one kernel call, bit-identical and faster.
     """
 
     def __init__(self, scene: Scene, dt: float = 1.0 / 240.0, num_worlds: int | None = None,
-                 config: SolverConfig | None = None):
+                 config: SolverConfig | None = None, profile: bool = False):
         if not isinstance(scene, Scene):
             raise ValueError(f"World: scene must be a rigid_gym.Scene, got {type(scene).__name__}")
         if len(scene) == 0:
@@ -99,6 +103,11 @@ class World:
         self.collider = Collider(self.geometry, self.model.motion, self.num_worlds,
                                  self.config.sweep)
         self.pair_contact_capacity = max_pair_contacts(self.geometry)
+        self.workspace = pipeline.Workspace(self.num_worlds, len(scene), self.pair_contact_capacity)
+        self.settings = pipeline.settings(self.config, self.model.gravity, self.collider.sweep)
+        if not isinstance(profile, bool):
+            raise ValueError(f"World.profile: must be True or False, got {profile!r}")
+        self.profiling = profile
         self.state = _build_state(scene, self.num_worlds)
         self._refresh_derived()
         self._initial_state = tuple(a.copy() for a in self.state)
@@ -112,18 +121,47 @@ class World:
         ``apply_force``/``apply_torque`` act during the next step only."""
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
             raise ValueError(f"World.step: n must be an int >= 0, got {n!r}")
+        if n == 0:
+            return
+        if not self.profiling:
+            pipeline.advance(self, int(n))
+            self.steps += int(n)
+            return
         with calling_thread_only(self.num_worlds == 1):
             for _ in range(int(n)):
                 pipeline.step(self, self.config, self.dt, self._profile)
-                self.state.force.fill(0.0)
-                self.state.torque.fill(0.0)
                 self.steps += 1
 
-    def reset(self) -> None:
-        """Put every world back to the scene's initial state (time 0)."""
+    def reset(self, world: int | None = None) -> None:
+        """Put every world (or only ``world``) back to the scene's initial state; the step
+        count (``time``) goes back to 0 only when every world is reset."""
+        worlds = self._worlds(world, "reset")
         for current, initial in zip(self.state, self._initial_state):
-            current[...] = initial
-        self.steps = 0
+            current[worlds] = initial[worlds]
+        if world is None:
+            self.steps = 0
+
+    def load(self, scene: Scene, world: int) -> None:
+        """Put ``scene``'s bodies into ``world``: their poses, velocities, masses, friction
+        and restitution (what a reset of one world with new parameters needs). The scene must
+        have this world's structure: the same bodies, shapes and motion classes in the same
+        order (the geometry is shared by all worlds)."""
+        w = self._worlds(world, "load")
+        if not isinstance(scene, Scene) or len(scene) != len(self.scene):
+            raise ValueError(f"World.load: scene must be a Scene of {len(self.scene)} bodies")
+        for mine, theirs in zip(self.scene.bodies, scene.bodies):
+            if mine.motion != theirs.motion or not _same_shape(mine.shape, theirs.shape):
+                raise ValueError(f"World.load: body {mine.index} ({mine.name!r}) differs in shape "
+                                 f"or motion from the world's scene; only poses, velocities and "
+                                 "materials may change between worlds")
+        for current, new in zip(self.model[1:5], _build_model(scene, 1)[1:5]):
+            current[w] = new[0]
+        for current, new in zip(self.state, _build_state(scene, 1)):
+            current[w] = new[0]
+
+    def view(self, world: int) -> WorldView:
+        """One world of a batched World, seen as an unbatched one (``WorldView``)."""
+        return WorldView(self, self._worlds(world, "view"))
 
     @property
     def time(self) -> float:
@@ -206,18 +244,21 @@ class World:
         total = np.sum(orbital + s.angular_momentum[:, dynamic], axis=1)
         return total if self.batched else total[0]
 
-    def contacts(self, margin: float = 0.0) -> Contacts:
+    def contacts(self, margin: float = 0.0, world: int | None = None) -> Contacts:
         """Contacts at the current poses: every point of one body inside another (depth > 0),
         or within ``margin`` (m) of it. See :class:`rigid_gym.collision.Contacts`; rows of all
-        worlds together, with their world index."""
+        worlds together (or of ``world`` only), with their world index."""
         margin = float(margin)
         if not np.isfinite(margin) or margin < 0.0:
             raise ValueError(f"World.contacts: margin must be finite and >= 0 m, got {margin!r}")
-        self.collider.detect(self.state, margin)
-        return self.collider.contacts()
+        worlds = self._worlds(world, "contacts")
+        first = 0 if world is None else worlds
+        self.collider.detect(self.state, margin, worlds)
+        return self.collider.contacts(worlds, first)
 
     def profile(self) -> dict[str, dict]:
-        """Per phase, in step order: whether it runs, total seconds and calls so far."""
+        """Per phase, in step order: whether it runs, total seconds and calls so far (timed
+        only in a World made with ``profile=True``)."""
         return {
             name: {"on": on, "seconds": self._profile.seconds.get(name, 0.0),
                    "calls": self._profile.calls.get(name, 0)}
@@ -245,15 +286,16 @@ class World:
         s = self.state
         if velocity is not None:
             s.velocity[worlds, i] = self._values(velocity, "velocity", "set_velocity", worlds)
-        if angular_velocity is not None:
-            w = self._values(angular_velocity, "angular_velocity", "set_velocity", worlds)
-            s.angular_velocity[worlds, i] = w
-            if self.model.motion[i] == DYNAMIC:
-                r = s.rotation[worlds, i]
-                moments = _safe_inverse(self.model.inverse_moments[worlds, i])
-                body_w = np.einsum("...ji,...j->...i", r, w)
-                s.angular_momentum[worlds, i] = np.einsum("...ij,...j->...i", r, moments * body_w)
-        self._refresh_derived()
+        if angular_velocity is None:
+            return  # R and omega are unchanged
+        w = self._values(angular_velocity, "angular_velocity", "set_velocity", worlds)
+        s.angular_velocity[worlds, i] = w
+        if self.model.motion[i] == DYNAMIC:
+            r = s.rotation[worlds, i]
+            moments = _safe_inverse(self.model.inverse_moments[worlds, i])
+            body_w = np.einsum("...ji,...j->...i", r, w)
+            s.angular_momentum[worlds, i] = np.einsum("...ij,...j->...i", r, moments * body_w)
+        self._refresh_derived(worlds)
 
     def set_pose(self, body: int, position=None, orientation=None, world: int | None = None) -> None:
         """Set a body's centre-of-mass position (3,) m and/or principal-frame orientation (4,)
@@ -266,7 +308,7 @@ class World:
             q = self._values(orientation, "orientation", "set_pose", worlds, size=4)
             quat.check_unit(q, f"World.set_pose: body {i} orientation")
             self.state.orientation[worlds, i] = quat.normalize(q)
-        self._refresh_derived()
+        self._refresh_derived(worlds)
 
     def apply_impulse(self, body: int, impulse, point=None, world: int | None = None) -> None:
         """Apply an impulse (3,) N s at ``point`` (3,) m, world frame (default: the centre of
@@ -282,7 +324,7 @@ class World:
         if point is not None:
             r = self._values(point, "point", "apply_impulse", worlds) - s.position[worlds, i]
             s.angular_momentum[worlds, i] += np.cross(r, j)
-        self._refresh_derived()
+        self._refresh_derived(worlds)
 
     def apply_force(self, body: int, force, point=None, world: int | None = None) -> None:
         """Add a force (3,) N acting at ``point`` (3,) m (default: the centre of mass) during
@@ -303,11 +345,15 @@ class World:
 
     # -- helpers -----------------------------------------------------------------------------
 
-    def _refresh_derived(self) -> None:
+    def _refresh_derived(self, worlds=slice(None)) -> None:
+        """R(q) and omega = I^-1 L of ``worlds`` (a slice, or one world's index)."""
         s, m = self.state, self.model
-        for_worlds(integrate.refresh_rotation_and_angular_velocity, self.num_worlds)(
-            s.orientation, s.angular_momentum, m.inverse_moments, m.motion, s.rotation,
-            s.angular_velocity)
+        if not isinstance(worlds, slice):
+            worlds = slice(worlds, worlds + 1)
+        count = len(range(*worlds.indices(self.num_worlds)))
+        for_worlds(integrate.refresh_rotation_and_angular_velocity, count)(
+            s.orientation[worlds], s.angular_momentum[worlds], m.inverse_moments[worlds],
+            m.motion, s.rotation[worlds], s.angular_velocity[worlds])
 
     def _body(self, body, method: str) -> int:
         n = len(self.scene)
@@ -336,6 +382,42 @@ class World:
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"World.{method}: {field} must be finite, got {arr.tolist()}")
         return arr
+
+
+class WorldView:
+    """World ``index`` of a batched World with the interface of an unbatched one: state
+    properties without the world axis, setters, ``contacts``, ``time``. It cannot step (the
+    batched World steps every world at once)."""
+
+    def __init__(self, world: World, index: int):
+        self.batch, self.index = world, index
+        self.scene, self.dt = world.scene, world.dt
+
+    position = property(lambda self: self.batch.position[self.index])
+    orientation = property(lambda self: self.batch.orientation[self.index])
+    velocity = property(lambda self: self.batch.velocity[self.index])
+    angular_velocity = property(lambda self: self.batch.angular_velocity[self.index])
+    rotation = property(lambda self: self.batch.rotation[self.index])
+    time = property(lambda self: self.batch.time)
+
+    def set_pose(self, body, position=None, orientation=None) -> None:
+        self.batch.set_pose(body, position, orientation, world=self.index)
+
+    def set_velocity(self, body, velocity=None, angular_velocity=None) -> None:
+        self.batch.set_velocity(body, velocity, angular_velocity, world=self.index)
+
+    def contacts(self, margin: float = 0.0) -> Contacts:
+        return self.batch.contacts(margin, world=self.index)
+
+
+def _same_shape(a, b) -> bool:
+    """Equal primitives (same type and dimensions); meshes and compounds only if identical."""
+    if a is b:
+        return True
+    if type(a) is not type(b) or isinstance(a, (Mesh, Compound)):
+        return False
+    return all(np.array_equal(getattr(a, f.name), getattr(b, f.name))
+               for f in dataclasses.fields(a))
 
 
 def _safe_inverse(x: np.ndarray) -> np.ndarray:

@@ -36,7 +36,7 @@ capsule's core is answered exactly up to the grid bound).
 """
 
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import rigid_gym as rg
@@ -132,10 +132,19 @@ def shape_frame_distance(world, scene, body, points):
     return spec.shape.signed_distance(spec.body_from_shape.apply_inverse(local))
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow],
+          derandomize=True)
 @given(shape_a=shapes, shape_b=shapes, qa=unit_quaternions, qb=unit_quaternions, u=directions,
        gap=st.floats(-0.1, 0.1), origin=st.tuples(*[st.floats(-2, 2)] * 3))
+@example(shape_a=MESHES[0], shape_b=MESHES[4], qa=np.array([0.0, 0.0, 0.0, 1.0]),
+         qb=np.array([0.0, 0.0, 0.0, 1.0]), u=np.array([np.sqrt(0.5), 0.0, np.sqrt(0.5)]),
+         gap=-0.09375, origin=(0.0, 0.0, 0.0))  # a random search found it: a box deep in the bowl
 def test_contacts_of_random_pairs(shape_a, shape_b, qa, qb, u, gap, origin):
+    """derandomize: the same examples every run, so CI is reproducible."""
+    check_contacts(shape_a, shape_b, qa, qb, u, gap, origin)
+
+
+def check_contacts(shape_a, shape_b, qa, qb, u, gap, origin):
     ra, rb = quat.to_matrix(qa), quat.to_matrix(qb)
     xa = np.array(origin)
     xb = xa + (support(shape_a, ra, u) + support(shape_b, rb, -u) + gap) * u
@@ -182,9 +191,11 @@ def test_contacts_of_random_pairs(shape_a, shape_b, qa, qb, u, gap, origin):
     assert np.all(sd_a <= tol_a), f"a point is {sd_a.max():.3g} m outside A"
     assert np.all(sd_b <= tol_b), f"a point is {sd_b.max():.3g} m outside B"
 
-    # the normal leaves B or enters A at the point (from B towards A)
+    # the normal leaves B or enters A at the point (from B towards A); a contact no deeper
+    # than the shapes' phi tolerance (faces exactly touching) has no direction to check
     eps = 1e-6
-    ahead, behind = c.point + eps * c.normal, c.point - eps * c.normal
+    deep = c.depth > tol_a + tol_b
+    ahead, behind = c.point[deep] + eps * c.normal[deep], c.point[deep] - eps * c.normal[deep]
     leaves_b = (shape_frame_distance(world, scene, 1, ahead)
                 - shape_frame_distance(world, scene, 1, behind)) > 0.0
     enters_a = (shape_frame_distance(world, scene, 0, ahead)

@@ -143,7 +143,7 @@ def test_profile_reports_phases():
     scene = rg.Scene()
     scene.add_ground()
     scene.add_body(rg.Box((0.05, 0.05, 0.05)), mass=1.0, position=(0, 0, 0.05))
-    world = rg.World(scene)
+    world = rg.World(scene, profile=True)
     world.step(5)
     profile = world.profile()
     assert list(profile) == ["broad_phase", "collision", "update_velocities", "contact",
@@ -152,7 +152,7 @@ def test_profile_reports_phases():
     ran = [p for name, p in profile.items() if name != "collision"]
     assert all(p["on"] and p["calls"] == 5 and p["seconds"] > 0 for p in ran)
 
-    flying = rg.World(mixed_scene())
+    flying = rg.World(mixed_scene(), profile=True)
     flying.step(5)
     calls = {name: p["calls"] for name, p in flying.profile().items()}
     assert calls["broad_phase"] == 5 and calls["update_positions"] == 5

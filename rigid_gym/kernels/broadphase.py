@@ -76,65 +76,115 @@ def add_pair(i, j, motion, pair_a, pair_b, count):
 
 
 @kernel
-def sort_pairs(pair_a, pair_b, count, num_bodies):
-    """Sort the first ``count`` pairs by (a, b)."""
-    keys = np.empty(count, dtype=np.int64)
+def sort_keys(keys, tmp, count):
+    """Sort keys[:count] ascending (bottom-up merge sort through ``tmp``, same length)."""
+    width = 1
+    src, dst = keys, tmp
+    in_tmp = False
+    while width < count:
+        for lo in range(0, count, 2 * width):
+            mid = min(lo + width, count)
+            hi = min(lo + 2 * width, count)
+            i, j = lo, mid
+            for k in range(lo, hi):
+                if i < mid and (j >= hi or src[i] <= src[j]):
+                    dst[k] = src[i]
+                    i += 1
+                else:
+                    dst[k] = src[j]
+                    j += 1
+        src, dst = dst, src
+        in_tmp = not in_tmp
+        width *= 2
+    if in_tmp:
+        for k in range(count):
+            keys[k] = src[k]
+
+
+@kernel
+def sort_pairs(pair_a, pair_b, count, num_bodies, keys, tmp):
+    """Sort the first ``count`` pairs by (a, b); keys, tmp: (>= count,) int64 scratch."""
     for k in range(count):
         keys[k] = np.int64(pair_a[k]) * num_bodies + pair_b[k]
-    order = np.argsort(keys, kind="mergesort")
+    sort_keys(keys, tmp, count)
     for k in range(count):
-        pair_a[k] = keys[order[k]] // num_bodies
-        pair_b[k] = keys[order[k]] % num_bodies
+        pair_a[k] = keys[k] // num_bodies
+        pair_b[k] = keys[k] % num_bodies
+
+
+@kernel
+def sort_by_lower_x(order, bounds):
+    """Insertion-sort the body indices ``order`` (n,) by (lower x bound, index). Bodies move
+    little between steps, so the previous step's order is nearly sorted: O(n) typically."""
+    for k in range(1, order.shape[0]):
+        i = order[k]
+        x = bounds[i, 0]
+        m = k - 1
+        while m >= 0 and (bounds[order[m], 0] > x or (bounds[order[m], 0] == x and order[m] > i)):
+            order[m + 1] = order[m]
+            m -= 1
+        order[m + 1] = i
+
+
+@kernel
+def find_world_pairs(position, rotation, velocity, angular_velocity, motion, geo, margin, dt,
+                     acceleration, sweep, bounds, order, pair_a, pair_b, keys, tmp):
+    """Candidate pairs of one world, for poses anywhere within the next dt; returns how many.
+
+    position (n, 3), rotation (n, 3, 3), velocity and angular_velocity (n, 3): body states;
+    every box is grown by ``swept_margin`` (margin m, dt s, acceleration bound m/s^2;
+    dt = 0 for the current poses only). A plane is tested against the grown boxes too.
+    sweep: sort and sweep (True) or brute force; bounds (n, 6): scratch; order (n,) int64:
+    body indices, kept between calls (sort and sweep starts from the last order);
+    pair_a, pair_b (P,) int32 out; keys, tmp (P,) int64 scratch. The count may exceed P, in
+    which case only P pairs were written and the caller must grow the buffers.
+    """
+    n = position.shape[0]
+    unbounded = geo.body_unbounded
+    for i in range(n):
+        if unbounded[i] == 0:
+            grown = swept_margin(velocity[i], angular_velocity[i], geo, i, margin, dt, acceleration)
+            write_bounds(position[i], rotation[i], geo, i, grown, bounds[i])
+    count = 0
+    for p in range(n):
+        if unbounded[p] == 0:
+            continue
+        for i in range(n):
+            if unbounded[i] == 0 and box_below_plane(position, rotation, bounds, i, p, 0.0):
+                count = add_pair(i, p, motion, pair_a, pair_b, count)
+    if sweep:
+        sort_by_lower_x(order, bounds)
+        for oi in range(n):
+            i = order[oi]
+            if unbounded[i] != 0:
+                continue
+            for oj in range(oi + 1, n):
+                j = order[oj]
+                if unbounded[j] != 0:
+                    continue
+                if bounds[j, 0] > bounds[i, 3]:
+                    break
+                if boxes_overlap(bounds, i, j):
+                    count = add_pair(i, j, motion, pair_a, pair_b, count)
+    else:
+        for i in range(n):
+            if unbounded[i] != 0:
+                continue
+            for j in range(i + 1, n):
+                if unbounded[j] == 0 and boxes_overlap(bounds, i, j):
+                    count = add_pair(i, j, motion, pair_a, pair_b, count)
+    if count <= pair_a.shape[0]:
+        sort_pairs(pair_a, pair_b, count, n, keys, tmp)
+    return count
 
 
 @kernel(parallel=True)
 def find_pairs(position, rotation, velocity, angular_velocity, motion, geo, margin, dt,
-               acceleration, sweep, bounds, pair_a, pair_b, pair_count):
-    """Candidate pairs of every world, for poses anywhere within the next dt.
-
-    position (B, n, 3), rotation (B, n, 3, 3), velocity and angular_velocity (B, n, 3): body
-    states; every box is grown by ``swept_margin`` (margin m, dt s, acceleration bound m/s^2;
-    dt = 0 for the current poses only). A plane is tested against the grown boxes too.
-    sweep: sort and sweep (True) or brute force; bounds (B, n, 6): scratch;
-    pair_a, pair_b (B, P) int32 out; pair_count (B,) int32 out: pairs found (may exceed P,
-    in which case only P were written and the caller must grow the buffers).
-    """
-    num_worlds, n = position.shape[0], position.shape[1]
-    unbounded = geo.body_unbounded
-    for w in prange(num_worlds):
-        for i in range(n):
-            if unbounded[i] == 0:
-                grown = swept_margin(velocity[w, i], angular_velocity[w, i], geo, i, margin, dt,
-                                     acceleration)
-                write_bounds(position[w, i], rotation[w, i], geo, i, grown, bounds[w, i])
-        count = 0
-        for p in range(n):
-            if unbounded[p] == 0:
-                continue
-            for i in range(n):
-                if unbounded[i] == 0 and box_below_plane(position[w], rotation[w], bounds[w], i, p, 0.0):
-                    count = add_pair(i, p, motion, pair_a[w], pair_b[w], count)
-        if sweep:
-            order = np.argsort(bounds[w, :, 0], kind="mergesort")
-            for oi in range(n):
-                i = order[oi]
-                if unbounded[i] != 0:
-                    continue
-                for oj in range(oi + 1, n):
-                    j = order[oj]
-                    if unbounded[j] != 0:
-                        continue
-                    if bounds[w, j, 0] > bounds[w, i, 3]:
-                        break
-                    if boxes_overlap(bounds[w], i, j):
-                        count = add_pair(i, j, motion, pair_a[w], pair_b[w], count)
-        else:
-            for i in range(n):
-                if unbounded[i] != 0:
-                    continue
-                for j in range(i + 1, n):
-                    if unbounded[j] == 0 and boxes_overlap(bounds[w], i, j):
-                        count = add_pair(i, j, motion, pair_a[w], pair_b[w], count)
-        pair_count[w] = count
-        if count <= pair_a.shape[1]:
-            sort_pairs(pair_a[w], pair_b[w], count, n)
+               acceleration, sweep, bounds, order, pair_a, pair_b, pair_count, keys, tmp):
+    """``find_world_pairs`` for every world: arrays as there with a leading world axis B;
+    pair_count (B,) int32 out."""
+    for w in prange(position.shape[0]):
+        pair_count[w] = find_world_pairs(position[w], rotation[w], velocity[w],
+                                         angular_velocity[w], motion, geo, margin, dt,
+                                         acceleration, sweep, bounds[w], order[w], pair_a[w],
+                                         pair_b[w], keys[w], tmp[w])

@@ -111,7 +111,7 @@ def grid_distance(values, offset, nx, ny, nz, ox, oy, oz, h, px, py, pz):
     return phi, gx / norm, gy / norm, gz / norm
 
 
-@kernel
+@kernel(inline=True)
 def geom_distance(geo, g, px, py, pz):
     """phi and unit gradient of geom ``g`` at (px, py, pz) in the geom's frame."""
     t = geo.geom_type[g]
@@ -215,7 +215,7 @@ def mesh_distance(geo, m, px, py, pz):
     return d, (px - qx) / d, (py - qy) / d, (pz - qz) / d
 
 
-@kernel
+@kernel(inline=True)
 def geom_distance_within(geo, g, px, py, pz, reach):
     """``geom_distance`` for a caller that needs phi only where phi < reach (m).
 

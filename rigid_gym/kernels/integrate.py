@@ -56,29 +56,38 @@ def refresh_rotation_and_angular_velocity(
                 angular_velocity[w, i, 2] = oz
 
 
+@kernel
+def update_world_velocities(
+    w, velocity, angular_momentum, angular_velocity, rotation, force, torque,
+    inverse_mass, inverse_moments, motion, gravity, dt,
+):
+    """V += dt (g + F/M), L += dt tau, omega = I(t)^-1 L, for the dynamic bodies of world w.
+
+    force, torque: (B, n, 3) external force (N) and torque about the centre of mass (N m),
+    held constant over the step; gravity: (3,) m/s^2; dt: s.
+    """
+    for i in range(velocity.shape[1]):
+        if motion[i] != DYNAMIC:
+            continue
+        for k in range(3):
+            velocity[w, i, k] += dt * (gravity[k] + force[w, i, k] * inverse_mass[w, i])
+            angular_momentum[w, i, k] += dt * torque[w, i, k]
+        lx, ly, lz = angular_momentum[w, i, 0], angular_momentum[w, i, 1], angular_momentum[w, i, 2]
+        ox, oy, oz = apply_inverse_inertia(rotation[w, i], inverse_moments[w, i], lx, ly, lz)
+        angular_velocity[w, i, 0] = ox
+        angular_velocity[w, i, 1] = oy
+        angular_velocity[w, i, 2] = oz
+
+
 @kernel(parallel=True)
 def update_velocities(
     velocity, angular_momentum, angular_velocity, rotation, force, torque,
     inverse_mass, inverse_moments, motion, gravity, dt,
 ):
-    """V += dt (g + F/M), L += dt tau, omega = I(t)^-1 L, for dynamic bodies.
-
-    force, torque: (B, n, 3) external force (N) and torque about the centre of mass (N m),
-    held constant over the step; gravity: (3,) m/s^2; dt: s.
-    """
-    num_worlds, num_bodies = velocity.shape[0], velocity.shape[1]
-    for w in prange(num_worlds):
-        for i in range(num_bodies):
-            if motion[i] != DYNAMIC:
-                continue
-            for k in range(3):
-                velocity[w, i, k] += dt * (gravity[k] + force[w, i, k] * inverse_mass[w, i])
-                angular_momentum[w, i, k] += dt * torque[w, i, k]
-            lx, ly, lz = angular_momentum[w, i, 0], angular_momentum[w, i, 1], angular_momentum[w, i, 2]
-            ox, oy, oz = apply_inverse_inertia(rotation[w, i], inverse_moments[w, i], lx, ly, lz)
-            angular_velocity[w, i, 0] = ox
-            angular_velocity[w, i, 1] = oy
-            angular_velocity[w, i, 2] = oz
+    """``update_world_velocities`` for every world."""
+    for w in prange(velocity.shape[0]):
+        update_world_velocities(w, velocity, angular_momentum, angular_velocity, rotation, force,
+                                torque, inverse_mass, inverse_moments, motion, gravity, dt)
 
 
 @kernel
@@ -113,46 +122,56 @@ def effective_angular_velocity(rotation, inverse_moments, lx, ly, lz, tx, ty, tz
     return bx + c6 * ddx + c12 * cx, by + c6 * ddy + c12 * cy, bz + c6 * ddz + c12 * cz
 
 
-@kernel(parallel=True)
-def update_positions(
-    position, orientation, velocity, angular_momentum, angular_velocity, rotation, torque,
+@kernel
+def update_world_positions(
+    w, position, orientation, velocity, angular_momentum, angular_velocity, rotation, torque,
     inverse_moments, motion, dt, order,
 ):
-    """X += dt V; advance q by the rotation of the step; refresh R and omega.
+    """X += dt V; advance q by the rotation of the step; refresh R and omega; world w.
 
     Dynamic bodies rotate in sub-steps of at most a quarter turn, each re-evaluating omega from
     L at the current orientation. Kinematic bodies turn at their set angular velocity (exact).
     order: 1, 2 or 3 (see the module docstring); dt: s.
     """
-    num_worlds, num_bodies = position.shape[0], position.shape[1]
-    for w in prange(num_worlds):
-        for i in range(num_bodies):
-            if motion[i] == STATIC:
-                continue
-            for k in range(3):
-                position[w, i, k] += dt * velocity[w, i, k]
-            q = orientation[w, i]
-            r = rotation[w, i]
-            if motion[i] == KINEMATIC:
-                rotate_by_angular_velocity(
-                    q, angular_velocity[w, i, 0], angular_velocity[w, i, 1], angular_velocity[w, i, 2], dt
-                )
-                rotation_from_quaternion(q, r)
-                continue
-            lx, ly, lz = angular_momentum[w, i, 0], angular_momentum[w, i, 1], angular_momentum[w, i, 2]
-            tx, ty, tz = torque[w, i, 0], torque[w, i, 1], torque[w, i, 2]
-            speed = math.sqrt(
-                angular_velocity[w, i, 0] ** 2 + angular_velocity[w, i, 1] ** 2 + angular_velocity[w, i, 2] ** 2
+    for i in range(position.shape[1]):
+        if motion[i] == STATIC:
+            continue
+        for k in range(3):
+            position[w, i, k] += dt * velocity[w, i, k]
+        q = orientation[w, i]
+        r = rotation[w, i]
+        if motion[i] == KINEMATIC:
+            rotate_by_angular_velocity(
+                q, angular_velocity[w, i, 0], angular_velocity[w, i, 1], angular_velocity[w, i, 2], dt
             )
-            substeps = max(1, int(math.ceil(speed * dt / QUARTER_TURN)))
-            h = dt / substeps
-            for _ in range(substeps):
-                bx, by, bz = effective_angular_velocity(
-                    r, inverse_moments[w, i], lx, ly, lz, tx, ty, tz, h, order
-                )
-                rotate_by_angular_velocity(q, bx, by, bz, h)
-                rotation_from_quaternion(q, r)
-            ox, oy, oz = apply_inverse_inertia(r, inverse_moments[w, i], lx, ly, lz)
-            angular_velocity[w, i, 0] = ox
-            angular_velocity[w, i, 1] = oy
-            angular_velocity[w, i, 2] = oz
+            rotation_from_quaternion(q, r)
+            continue
+        lx, ly, lz = angular_momentum[w, i, 0], angular_momentum[w, i, 1], angular_momentum[w, i, 2]
+        tx, ty, tz = torque[w, i, 0], torque[w, i, 1], torque[w, i, 2]
+        speed = math.sqrt(
+            angular_velocity[w, i, 0] ** 2 + angular_velocity[w, i, 1] ** 2 + angular_velocity[w, i, 2] ** 2
+        )
+        substeps = max(1, int(math.ceil(speed * dt / QUARTER_TURN)))
+        h = dt / substeps
+        for _ in range(substeps):
+            bx, by, bz = effective_angular_velocity(
+                r, inverse_moments[w, i], lx, ly, lz, tx, ty, tz, h, order
+            )
+            rotate_by_angular_velocity(q, bx, by, bz, h)
+            rotation_from_quaternion(q, r)
+        ox, oy, oz = apply_inverse_inertia(r, inverse_moments[w, i], lx, ly, lz)
+        angular_velocity[w, i, 0] = ox
+        angular_velocity[w, i, 1] = oy
+        angular_velocity[w, i, 2] = oz
+
+
+@kernel(parallel=True)
+def update_positions(
+    position, orientation, velocity, angular_momentum, angular_velocity, rotation, torque,
+    inverse_moments, motion, dt, order,
+):
+    """``update_world_positions`` for every world."""
+    for w in prange(position.shape[0]):
+        update_world_positions(w, position, orientation, velocity, angular_momentum,
+                               angular_velocity, rotation, torque, inverse_moments, motion, dt,
+                               order)

@@ -5,11 +5,15 @@
 ``error_model="numpy"`` so a division by zero gives inf/nan (caught by validation upstream)
 rather than a Python exception inside a parallel loop.
 
+Kernels are compiled without reference counting and small helpers are inlined (``kernel``):
+both remove per-call costs that dominated the step (docs/architecture.md, "Speed").
+
 A kernel compiled with ``parallel=True`` (a ``prange`` over worlds) also carries a serial twin,
 ``kernel.serial``: with a single world, waking numba's thread pool costs more than the work
-(about 8 ms per call when another process keeps the cores busy), so single worlds use it for
-the light kernels, and run the solver phases' parallel code on the calling thread alone
-(``calling_thread_only``).
+(about 8 ms per call when another process keeps the cores busy). ``World.step`` calls the
+whole-step kernel ``kernels.step.step_world`` directly for a single world; the phase-by-phase
+pipeline (``World(profile=True)``) uses the twins for the light kernels and runs the solver
+phases' parallel code on the calling thread alone (``calling_thread_only``).
 """
 
 import contextlib
@@ -20,13 +24,30 @@ import numba
 JIT_FLAGS = dict(cache=True, fastmath=False, nogil=True, error_model="numpy")
 
 
-def kernel(fn=None, *, parallel: bool = False):
-    """Compile ``fn`` with the project's flags; ``parallel=True`` enables ``numba.prange`` and
-    adds the serial twin ``.serial``."""
+def kernel(fn=None, *, parallel: bool = False, allocates: bool = False, views: bool = False,
+           inline: bool = False):
+    """Compile ``fn`` with the project's flags.
+
+    Kernels do not reference-count arrays (numba's ``_nrt=False``): numba otherwise increments
+    and decrements, atomically, the count of every array a call receives, a namedtuple's
+    members included, at every call that is not inlined; with the geometry's 21 arrays, that
+    made a plane's distance cost 300 ns instead of 20 (measured). Such kernels cannot allocate:
+    ``allocates=True`` keeps reference counting for those that do (outside the step).
+    ``views=True`` for a kernel that returns views of its arguments: it is inlined into its
+    caller, so the views are counted exactly when the caller counts (a view returned
+    uncounted to a counting caller would be released twice: heap corruption, seen).
+    ``inline=True`` for a small hot helper that takes namedtuples of arrays: inlined (numba
+    IR) into its callers, since a call passes every member's fields as separate arguments
+    (the geometry alone is ~180): a box's 8 corners against a plane took 981 ns, 446 inlined.
+    ``parallel=True`` enables
+    ``numba.prange`` (with counting, as numba's parallel loops need) and adds the serial twin
+    ``.serial``."""
 
     def wrap(f):
+        if views or inline:
+            return numba.njit(**JIT_FLAGS, inline="always")(f)
         if not parallel:
-            return numba.njit(**JIT_FLAGS)(f)
+            return numba.njit(**JIT_FLAGS, _nrt=allocates)(f)
         compiled = numba.njit(parallel=True, **JIT_FLAGS)(f)
         # a distinct name keeps the twin's on-disk cache apart from the parallel one
         twin = types.FunctionType(f.__code__, f.__globals__, f.__name__ + "_serial",

@@ -74,7 +74,7 @@ def rotate(r, vx, vy, vz):
             r[2, 0] * vx + r[2, 1] * vy + r[2, 2] * vz)
 
 
-@kernel
+@kernel(inline=True)
 def world_point_in_geom(geo, g, xb, rb, wx, wy, wz, reach):
     """phi of geom ``g`` (of the body at pose xb, rb) at world point w, and its outward normal
     in world coordinates; returns (phi, nx, ny, nz). reach: m, phi is needed only below it
@@ -87,7 +87,7 @@ def world_point_in_geom(geo, g, xb, rb, wx, wy, wz, reach):
     return phi, nx, ny, nz
 
 
-@kernel
+@kernel(inline=True)
 def core_point(geo, g, x, r, t):
     """World position of the point at parameter t in [-1, 1] along geom g's core (a sphere's
     centre; a capsule's axis from -half_length to +half_length)."""
@@ -127,7 +127,7 @@ def closest_on_segments(p1, q1, p2, q2):
     return s, t
 
 
-@kernel
+@kernel(inline=True)
 def emit(points, normals, depths, index, capacity, px, py, pz, nx, ny, nz, depth):
     """Write one contact at ``index`` if it fits."""
     if index < capacity:
@@ -299,7 +299,7 @@ def collide_core_with_field(geo, gc, xc, rc, gf, xf, rf, sign, margin, points, n
     return found + interior
 
 
-@kernel
+@kernel(inline=True)
 def sample_in_field(geo, k, xs, rs, gf, xf, rf, sign, margin, points, normals, depths, index,
                     capacity):
     """Surface sample k (of a geom at pose xs, rs) in the phi of geom gf; returns 1 if it is a
@@ -353,7 +353,7 @@ def collide_samples_with_field(geo, gs, xs, rs, gf, xf, rf, sign, margin, points
     return found
 
 
-@kernel
+@kernel(inline=True)
 def geom_pose(geo, g, x, r, out_x, out_r):
     """World pose of geom g of a body at pose (x, r), written to out_x (3,), out_r (3, 3)."""
     p = geo.geom_position[g]
@@ -377,7 +377,7 @@ def collide_box_geoms(geo, ga, xa, ra, gb, xb, rb, margin, points, normals, dept
                          scratch)
 
 
-@kernel
+@kernel(inline=True)
 def is_core(geo, g):
     return geo.geom_type[g] == SPHERE or geo.geom_type[g] == CAPSULE
 

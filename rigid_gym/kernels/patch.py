@@ -39,6 +39,12 @@ UNRESOLVED = 2
 """Outcomes of ``resolve_patch``."""
 COLLINEAR = 1e-6
 """A patch is an edge when its smaller in-plane spread is below this fraction of its larger."""
+REST_SPEED = 1e-9
+"""m/s: contacts approaching slower than this are at rest and get no impulse. An exact
+resolve leaves round-off (about 1e-17 m/s) behind; without a floor every later pass would
+apply a round-off impulse and count as work done, so the passes never stopped early (a cube
+resting on the table used all 10 contact passes). Gravity alone brings 0.04 m/s per step of
+1/240 s, so nothing below the floor can build up; 1e-9 m/s is 1 nm of drift in 1 s."""
 SINGULAR = 1e-12
 """Pivots below this fraction of the largest diagonal entry mean an unsolvable system."""
 
@@ -170,7 +176,7 @@ def patch_shape(scratch, seed, count, cx, cy, cz, t1x, t1y, t1z, t2x, t2y, t2z):
     return EDGE, ca * t1x + sa * t2x, ca * t1y + sa * t2y, ca * t1z + sa * t2z, radius
 
 
-@kernel
+@kernel(inline=True)
 def apply_wrench(state, model, w, i, sign, jx, jy, jz, mx, my, mz, rx, ry, rz):
     """sign * (j at lever r, plus angular impulse m) on body i: V += j/M, L += r x j + m."""
     inv = model.inverse_mass[w, i]
@@ -197,7 +203,8 @@ def resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed, co
     contacts have ``scratch.group == seed``. prior: the impulse the patch's pairs already
     transmitted to a this step (N s); the static wrench must keep prior + j inside the friction
     cone. Returns (outcome, linear impulse applied to a): APPLIED; SEPARATING when holding the
-    patch would need a pulling impulse (j_n <= 0: nothing to do); or UNRESOLVED (nothing
+    patch would need a pulling impulse (j_n <= 0), or when it is at rest (its points' relative
+    speeds below REST_SPEED): nothing to do; or UNRESOLVED (nothing
     applied) for a single point or a body tipping over an edge, which the caller treats with a
     single impulse."""
     # geometric centroid and mean normal of the patch
@@ -240,6 +247,8 @@ def resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed, co
     wx = state.angular_velocity[w, a, 0] - state.angular_velocity[w, b, 0]
     wy = state.angular_velocity[w, a, 1] - state.angular_velocity[w, b, 1]
     wz = state.angular_velocity[w, a, 2] - state.angular_velocity[w, b, 2]
+    if max(abs(vx), abs(vy), abs(vz), rho * max(abs(wx), abs(wy), abs(wz))) < REST_SPEED:
+        return SEPARATING, 0.0, 0.0, 0.0  # at rest: nothing to do
     big = scratch.wrench
     big[:, :] = 0.0
     if movable_a:
@@ -303,7 +312,7 @@ def resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed, co
     return APPLIED, jn * sx, jn * sy, jn * sz
 
 
-@kernel
+@kernel(inline=True)
 def relative_point_velocity(state, w, a, b, rax, ray, raz, rbx, rby, rbz):
     """(V_a + w_a x r_a) - (V_b + w_b x r_b); a 3-tuple."""
     pa = cross(state.angular_velocity[w, a, 0], state.angular_velocity[w, a, 1],
@@ -365,14 +374,14 @@ def moment(d, sol, first, k):
     return mx, my, mz
 
 
-@kernel
+@kernel(inline=True)
 def pressure_inside(scratch, seed, count, cx, cy, cz, nx, ny, nz, mx, my, mz, jn):
     """Is the centre of pressure c + n x m_t / j_n (m_t: the tip moment) within the patch?"""
     dx, dy, dz = cross(nx, ny, nz, mx / jn, my / jn, mz / jn)
     return centre_of_pressure_inside(scratch, seed, count, cx, cy, cz, dx, dy, dz)
 
 
-@kernel
+@kernel(inline=True)
 def apply_pair(state, model, w, a, b, movable_a, movable_b, jx, jy, jz, mx, my, mz,
                rax, ray, raz, rbx, rby, rbz):
     """The wrench (j, m) on a and its opposite on b (movable bodies only)."""

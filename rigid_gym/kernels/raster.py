@@ -121,7 +121,7 @@ def _clip_near(corners, near, out):
     return count
 
 
-@kernel
+@kernel(allocates=True)
 def rasterize(world, world_normal, first, last, eye, axes, focal, near, light,
               nearness, ids, diffuse):
     """Draw triangles ``first`` to ``last - 1`` with a perspective camera into the buffers.
@@ -159,7 +159,7 @@ def rasterize(world, world_normal, first, last, eye, axes, focal, near, light,
                   t, nearness, ids, diffuse)
 
 
-@kernel
+@kernel(allocates=True)
 def shadow_map(world, count, light_axes, origin, texel, nearness, ids, diffuse):
     """Draw the faces of triangles 0 to ``count - 1`` that face away from the light into an
     orthographic shadow map.

@@ -37,6 +37,7 @@ from rigid_gym.kernels.jit import kernel, prange
 from rigid_gym.kernels.narrowphase import collide_bodies
 from rigid_gym.kernels.patch import (
     APPLIED,
+    REST_SPEED,
     SEPARATING,
     apply_pair,
     relative_point_velocity,
@@ -70,24 +71,37 @@ PATCH_COS = 0.95
 """Contacts of a pair whose normals agree within this cosine form one patch (one impulse)."""
 
 Scratch = namedtuple("Scratch", "position quaternion rotation point normal depth group partner "
-                                "source orient k box directions wrench system rhs solution work")
+                                "source orient k box directions wrench system rhs solution work "
+                                "lookahead")
+"""Work arrays of the impulse phases, each with a leading world axis B: predicted poses
+(B, n, 3), (B, n, 4), (B, n, 3, 3); contacts (B, C, 3), (B, C, 3), (B, C) with their patch and
+partner bookkeeping (B, C) int64 / float64; a 3x3 matrix; box-clipping space (B, 3, 16, 3);
+the patch solve's directions, 6x6 systems and vectors; the prediction's extra shift (B, 3).
+C is the contact capacity the Scratch was made for. ``world_scratch`` takes one world's rows."""
+
+SCRATCH_SHAPES = (("position", ("n", 3), np.float64), ("quaternion", ("n", 4), np.float64),
+                  ("rotation", ("n", 3, 3), np.float64), ("point", ("c", 3), np.float64),
+                  ("normal", ("c", 3), np.float64), ("depth", ("c",), np.float64),
+                  ("group", ("c",), np.int64), ("partner", ("c",), np.int64),
+                  ("source", ("c",), np.int64), ("orient", ("c",), np.float64),
+                  ("k", (3, 3), np.float64), ("box", (3, 16, 3), np.float64),
+                  ("directions", (3, 3), np.float64), ("wrench", (6, 6), np.float64),
+                  ("system", (6, 6), np.float64), ("rhs", (6,), np.float64),
+                  ("solution", (6,), np.float64), ("work", (2, 3, 3), np.float64),
+                  ("lookahead", (3,), np.float64))
+"""Per-world shape of each Scratch field ("n": bodies, "c": contact capacity) and dtype."""
 
 
-@kernel
-def make_scratch(num_bodies, capacity):
-    """Work arrays for one world: predicted poses (n, 3), (n, 4), (n, 3, 3); contacts
-    (capacity, 3), (capacity, 3), (capacity,) with their patch and partner bookkeeping; a 3x3
-    matrix; box-clipping space; and the patch solve's directions, 6x6 systems and vectors."""
-    return Scratch(np.empty((num_bodies, 3)), np.empty((num_bodies, 4)),
-                   np.empty((num_bodies, 3, 3)), np.empty((capacity, 3)),
-                   np.empty((capacity, 3)), np.empty(capacity), np.empty(capacity, dtype=np.int64),
-                   np.empty(capacity, dtype=np.int64), np.empty(capacity, dtype=np.int64),
-                   np.empty(capacity), np.empty((3, 3)), np.empty((3, 16, 3)),
-                   np.empty((3, 3)), np.empty((6, 6)), np.empty((6, 6)), np.empty(6), np.empty(6),
-                   np.empty((2, 3, 3)))
+@kernel(views=True)
+def world_scratch(s, w):
+    """The rows of world w of a batched Scratch."""
+    return Scratch(s.position[w], s.quaternion[w], s.rotation[w], s.point[w], s.normal[w],
+                   s.depth[w], s.group[w], s.partner[w], s.source[w], s.orient[w], s.k[w],
+                   s.box[w], s.directions[w], s.wrench[w], s.system[w], s.rhs[w], s.solution[w],
+                   s.work[w], s.lookahead[w])
 
 
-@kernel
+@kernel(inline=True)
 def predict_pose(state, model, w, i, dt, lookahead, scratch):
     """Body i's pose after dt at its current velocity, into the scratch rows of i. Dynamic
     bodies also move by ``lookahead`` (3,) m: the collision phase passes dt^2 g, so that a
@@ -121,7 +135,7 @@ def find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, margin, scratc
                           scratch.normal, scratch.depth, 0, scratch.depth.shape[0], scratch.box)
 
 
-@kernel
+@kernel(inline=True)
 def relative_velocity(state, w, a, b, scratch, px, py, pz):
     """v_a - v_b at world point p, each body's lever arm taken from its predicted centre."""
     return relative_point_velocity(
@@ -130,7 +144,7 @@ def relative_velocity(state, w, a, b, scratch, px, py, pz):
         pz - scratch.position[b, 2])
 
 
-@kernel
+@kernel(inline=True)
 def same_motion(state, w, p, q):
     """Do bodies p and q move as one rigid body, to within SAME_MOTION (same omega and same
     V - omega x X)?"""
@@ -163,7 +177,7 @@ def gather_patch(state, w, scratch, seed, count):
         if n[0] * seed_n[0] + n[1] * seed_n[1] + n[2] * seed_n[2] < PATCH_COS:
             continue
         scratch.group[i] = seed
-        if scratch.depth[i] < 0.0:
+        if scratch.depth[i] < -REST_SPEED:
             approaching += 1
     return approaching
 
@@ -174,7 +188,7 @@ def approach_weighted_centre(scratch, seed, count):
     approach speed -v_n, and their mean distance from that centroid (m)."""
     total = cx = cy = cz = nx = ny = nz = 0.0
     for i in range(seed, count):
-        if scratch.group[i] == seed and scratch.depth[i] < 0.0:
+        if scratch.group[i] == seed and scratch.depth[i] < -REST_SPEED:
             weight = -scratch.depth[i]
             total += weight
             cx += weight * scratch.point[i, 0]
@@ -190,13 +204,13 @@ def approach_weighted_centre(scratch, seed, count):
     norm = math.sqrt(nx * nx + ny * ny + nz * nz)
     radius = 0.0
     for i in range(seed, count):
-        if scratch.group[i] == seed and scratch.depth[i] < 0.0:
+        if scratch.group[i] == seed and scratch.depth[i] < -REST_SPEED:
             dx, dy, dz = scratch.point[i, 0] - cx, scratch.point[i, 1] - cy, scratch.point[i, 2] - cz
             radius += -scratch.depth[i] * math.sqrt(dx * dx + dy * dy + dz * dz)
     return cx, cy, cz, nx / norm, ny / norm, nz / norm, radius / total
 
 
-@kernel
+@kernel(inline=True)
 def prior_impulse(scratch, seed, count, accumulated):
     """What the pairs behind patch ``seed`` already transmitted to its body this step (their
     contacts are contiguous, so each pair is counted once); a 3-tuple, N s."""
@@ -211,7 +225,7 @@ def prior_impulse(scratch, seed, count, accumulated):
     return px, py, pz
 
 
-@kernel
+@kernel(inline=True)
 def record_impulse(scratch, seed, accumulated, jx, jy, jz):
     """Add impulse j (on the patch's body) to the step total of the seed contact's pair."""
     k = scratch.source[seed]
@@ -221,7 +235,7 @@ def record_impulse(scratch, seed, accumulated, jx, jy, jz):
     accumulated[k, 2] += o * jz
 
 
-@kernel
+@kernel(inline=True)
 def restitution_for(model, w, a, b, mode, ramp_e):
     """COLLISION: the pair's max(e_a, e_b); CONTACT: the ramp value; SHOCK: 0."""
     if mode == COLLISION:
@@ -301,7 +315,7 @@ def resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mo
             continue
         cx, cy, cz, nx, ny, nz, radius = approach_weighted_centre(scratch, seed, count)
         vx, vy, vz = relative_velocity(state, w, a, b, scratch, cx, cy, cz)
-        if vx * nx + vy * ny + vz * nz >= 0.0:
+        if vx * nx + vy * ny + vz * nz >= -REST_SPEED:
             continue
         rax, ray, raz = cx - scratch.position[a, 0], cy - scratch.position[a, 1], cz - scratch.position[a, 2]
         rbx, rby, rbz = cx - scratch.position[b, 0], cy - scratch.position[b, 1], cz - scratch.position[b, 2]
@@ -324,8 +338,8 @@ def resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mo
 
 
 @kernel
-def resolve_supported_body(state, model, geo, w, body, level, current, touching, pair_a, pair_b,
-                           body_pair_start, body_pairs, dt, lookahead, scratch, wide, accumulated):
+def resolve_supported_body(state, model, geo, w, body, current, pair_a, pair_b, dt, scratch,
+                           wide, graph, accumulated):
     """Shock propagation for one body of the level being processed against all its frozen
     supports at once: their contacts (deepest first per pair, normals turned towards ``body``)
     go into ``wide`` and are resolved as patches, so a box straddling two frozen boxes is held
@@ -333,13 +347,12 @@ def resolve_supported_body(state, model, geo, w, body, level, current, touching,
     count = 0
     capacity = wide.depth.shape[0]
     applied = 0
-    for s in range(body_pair_start[body], body_pair_start[body + 1]):
-        k = body_pairs[s]
-        if not touching[k]:
-            continue
-        a, b = pair_a[w, k], pair_b[w, k]
+    lookahead = scratch.lookahead
+    for s in range(graph.body_pair_start[body], graph.body_pair_start[body + 1]):
+        k = graph.body_pairs[s]
+        a, b = pair_a[k], pair_b[k]
         other = b if a == body else a
-        if model.motion[other] == DYNAMIC and level[other] >= current:
+        if model.motion[other] == DYNAMIC and graph.level[other] >= current:
             continue  # not frozen: resolved pair by pair
         found = find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, GRAPH_MARGIN,
                                    scratch)
@@ -364,44 +377,82 @@ def resolve_supported_body(state, model, geo, w, body, level, current, touching,
                                      accumulated)
 
 
+@kernel
+def resolve_world_contacts(state, model, geo, w, pair_a, pair_b, pairs, accumulated, dt, mode,
+                           passes, scratch):
+    """The collision (mode COLLISION) or contact (mode CONTACT) phase for world w: up to
+    ``passes`` sweeps over its ``pairs`` candidate pairs (pair_a, pair_b (P,) int32), stopping
+    early when a sweep applies no impulse. accumulated (P, 3): each pair's impulse on its body
+    a in this step, N s (added to here); scratch: the batched Scratch."""
+    scratch = world_scratch(scratch, w)
+    for c in range(3):
+        scratch.lookahead[c] = dt * dt * model.gravity[c] if mode == COLLISION else 0.0
+    for p in range(passes):
+        ramp_e = CONTACT_RESTITUTION_START * (1.0 - (p + 1.0) / passes)
+        applied = 0
+        for k in range(pairs):
+            a, b = pair_a[k], pair_b[k]
+            applied += resolve_pair(state, model, geo, w, k, a, b, dt, scratch.lookahead, mode,
+                                    ramp_e, model.motion[a] == DYNAMIC,
+                                    model.motion[b] == DYNAMIC, scratch, accumulated)
+        if applied == 0:
+            break
+
+
 @kernel(parallel=True)
 def resolve_contacts(state, model, geo, pair_a, pair_b, pair_count, pair_impulse, dt, mode,
-                     passes, capacity):
-    """The collision (mode COLLISION) or contact (mode CONTACT) phase for every world:
-    up to ``passes`` sweeps over the candidate pairs, stopping early when a sweep applies no
-    impulse. pair_impulse (B, P, 3): each pair's impulse on its body a in this step, N s
-    (accumulated here); capacity: the most contacts one pair can have."""
-    num_worlds, n = state.position.shape[0], state.position.shape[1]
-    lookahead = np.zeros(3)
-    if mode == COLLISION:
-        for c in range(3):
-            lookahead[c] = dt * dt * model.gravity[c]
-    for w in prange(num_worlds):
-        scratch = make_scratch(n, capacity)
-        for p in range(passes):
-            ramp_e = CONTACT_RESTITUTION_START * (1.0 - (p + 1.0) / passes)
-            applied = 0
-            for k in range(pair_count[w]):
-                a, b = pair_a[w, k], pair_b[w, k]
-                applied += resolve_pair(state, model, geo, w, k, a, b, dt, lookahead, mode, ramp_e,
-                                        model.motion[a] == DYNAMIC, model.motion[b] == DYNAMIC,
-                                        scratch, pair_impulse[w])
-            if applied == 0:
-                break
+                     passes, scratch):
+    """``resolve_world_contacts`` for every world; arrays with a leading world axis B."""
+    for w in prange(state.position.shape[0]):
+        resolve_world_contacts(state, model, geo, w, pair_a[w], pair_b[w], pair_count[w],
+                               pair_impulse[w], dt, mode, passes, scratch)
+
+
+Graph = namedtuple("Graph", "touching edge_from edge_to edge_start targets component "
+                            "component_level by_component index low on_stack stack calls "
+                            "next_edge level by_level counts body_pair_start body_pairs")
+"""Work arrays of shock propagation, each with a leading world axis B (n bodies, P pair
+capacity): touching (P,) bool; the contact graph's edges edge_from, edge_to (2P,) int64 and
+their CSR form edge_start (n + 1,), targets (2P,); Tarjan's component (n,), index, low,
+on_stack (bool), stack, calls, next_edge (n,); component_level, by_component (n,); each body's
+level and the bodies by level (n,); counts (n + 2,) for counting sorts; each body's touching
+pairs body_pair_start (n + 1,), body_pairs (2P,). ``world_graph`` takes one world's rows."""
+
+GRAPH_SHAPES = (("touching", ("p",), np.bool_), ("edge_from", ("2p",), np.int64),
+                ("edge_to", ("2p",), np.int64), ("edge_start", ("n+1",), np.int64),
+                ("targets", ("2p",), np.int64), ("component", ("n",), np.int64),
+                ("component_level", ("n",), np.int64), ("by_component", ("n",), np.int64),
+                ("index", ("n",), np.int64), ("low", ("n",), np.int64),
+                ("on_stack", ("n",), np.bool_), ("stack", ("n",), np.int64),
+                ("calls", ("n",), np.int64), ("next_edge", ("n",), np.int64),
+                ("level", ("n",), np.int64), ("by_level", ("n",), np.int64),
+                ("counts", ("n+2",), np.int64), ("body_pair_start", ("n+1",), np.int64),
+                ("body_pairs", ("2p",), np.int64))
+"""Per-world shape of each Graph field ("n": bodies, "p": pair capacity) and dtype."""
+
+
+@kernel(views=True)
+def world_graph(g, w):
+    """The rows of world w of a batched Graph."""
+    return Graph(g.touching[w], g.edge_from[w], g.edge_to[w], g.edge_start[w], g.targets[w],
+                 g.component[w], g.component_level[w], g.by_component[w], g.index[w], g.low[w],
+                 g.on_stack[w], g.stack[w], g.calls[w], g.next_edge[w], g.level[w],
+                 g.by_level[w], g.counts[w], g.body_pair_start[w], g.body_pairs[w])
 
 
 @kernel
-def strongly_connected_components(n, edge_start, edge_to, component):
+def strongly_connected_components(n, graph):
     """Tarjan's algorithm without recursion over the graph with node v's successors
-    edge_to[edge_start[v]:edge_start[v + 1]]. Writes component[v] and returns the count.
-    Components come out in reverse topological order: an edge between components always
-    goes from a higher number to a lower one."""
-    index = np.full(n, -1, dtype=np.int64)
-    low = np.zeros(n, dtype=np.int64)
-    on_stack = np.zeros(n, dtype=np.bool_)
-    stack = np.empty(n, dtype=np.int64)
-    calls = np.empty(n, dtype=np.int64)
-    next_edge = np.empty(n, dtype=np.int64)
+    graph.targets[edge_start[v]:edge_start[v + 1]]. Writes graph.component[v] and returns the
+    count. Components come out in reverse topological order: an edge between components
+    always goes from a higher number to a lower one."""
+    edge_start, edge_to, component = graph.edge_start, graph.targets, graph.component
+    index, low, on_stack = graph.index, graph.low, graph.on_stack
+    stack, calls, next_edge = graph.stack, graph.calls, graph.next_edge
+    for v in range(n):
+        index[v] = -1
+        low[v] = 0
+        on_stack[v] = False
     counter = 0
     count = 0
     top = 0
@@ -449,23 +500,49 @@ def strongly_connected_components(n, edge_start, edge_to, component):
 
 
 @kernel
-def contact_levels(n, motion, edge_from, edge_to, num_edges, level):
-    """level[v] for every body: 0 for static and kinematic bodies; for dynamic ones
-    1 + the highest level among the bodies supporting it (cycles share one level)."""
-    order = np.argsort(edge_from[:num_edges], kind="mergesort")
-    edge_start = np.zeros(n + 1, dtype=np.int64)
-    targets = np.empty(num_edges, dtype=np.int64)
+def counting_sort(keys, n, num_keys, counts, out):
+    """out[:n] = the indices 0..n-1 ordered by keys[:n] (ints in [0, num_keys)), ties by
+    index (a stable sort); counts: (>= num_keys + 1,) scratch."""
+    for k in range(num_keys + 1):
+        counts[k] = 0
+    for v in range(n):
+        counts[keys[v] + 1] += 1
+    for k in range(num_keys):
+        counts[k + 1] += counts[k]
+    for v in range(n):
+        out[counts[keys[v]]] = v
+        counts[keys[v]] += 1
+
+
+@kernel
+def contact_levels(n, motion, num_edges, graph):
+    """graph.level[v] for every body: 0 for static and kinematic bodies; for dynamic ones
+    1 + the highest level among the bodies supporting it (cycles share one level); the
+    edges are graph.edge_from/edge_to[:num_edges]."""
+    edge_start, targets, counts = graph.edge_start, graph.targets, graph.counts
+    # CSR form of the edges, each node's successors in edge order
+    for v in range(n + 1):
+        edge_start[v] = 0
     for k in range(num_edges):
-        edge_start[edge_from[k] + 1] += 1
+        edge_start[graph.edge_from[k] + 1] += 1
     for v in range(n):
         edge_start[v + 1] += edge_start[v]
+        counts[v] = edge_start[v]
     for k in range(num_edges):
-        targets[k] = edge_to[order[k]]
-    component = np.empty(n, dtype=np.int64)
-    count = strongly_connected_components(n, edge_start, targets, component)
-    component_level = np.ones(count, dtype=np.int64)
-    by_component = np.argsort(-component, kind="mergesort")  # topological order
-    for v in by_component:
+        v = graph.edge_from[k]
+        targets[counts[v]] = graph.edge_to[k]
+        counts[v] += 1
+    component = graph.component
+    count = strongly_connected_components(n, graph)
+    component_level = graph.component_level
+    for c in range(count):
+        component_level[c] = 1
+    # topological order: components from the highest number down
+    for v in range(n):
+        graph.level[v] = count - 1 - component[v]  # reused as the sort key
+    counting_sort(graph.level, n, count, counts, graph.by_component)
+    for m in range(n):
+        v = graph.by_component[m]
         c = component[v]
         for k in range(edge_start[v], edge_start[v + 1]):
             u = targets[k]
@@ -473,86 +550,102 @@ def contact_levels(n, motion, edge_from, edge_to, num_edges, level):
                 component_level[component[u]] = max(component_level[component[u]],
                                                      component_level[c] + 1)
     for v in range(n):
-        level[v] = component_level[component[v]] if motion[v] == DYNAMIC else 0
+        graph.level[v] = component_level[component[v]] if motion[v] == DYNAMIC else 0
 
 
 @kernel
-def pairs_by_body(n, pair_a, pair_b, pairs, touching):
+def pairs_by_body(n, pair_a, pair_b, pairs, graph):
     """CSR adjacency of the touching pairs: body v's pairs are
-    body_pairs[body_pair_start[v]:body_pair_start[v + 1]]."""
-    start = np.zeros(n + 1, dtype=np.int64)
+    graph.body_pairs[body_pair_start[v]:body_pair_start[v + 1]], in pair order."""
+    start, fill = graph.body_pair_start, graph.counts
+    for v in range(n + 1):
+        start[v] = 0
     for k in range(pairs):
-        if touching[k]:
+        if graph.touching[k]:
             start[pair_a[k] + 1] += 1
             start[pair_b[k] + 1] += 1
     for v in range(n):
         start[v + 1] += start[v]
-    fill = start[:-1].copy()
-    body_pairs = np.empty(start[n], dtype=np.int64)
+        fill[v] = start[v]
     for k in range(pairs):
-        if touching[k]:
-            body_pairs[fill[pair_a[k]]] = k
+        if graph.touching[k]:
+            graph.body_pairs[fill[pair_a[k]]] = k
             fill[pair_a[k]] += 1
-            body_pairs[fill[pair_b[k]]] = k
+            graph.body_pairs[fill[pair_b[k]]] = k
             fill[pair_b[k]] += 1
-    return start, body_pairs
+
+
+@kernel
+def build_contact_graph(state, model, geo, w, pair_a, pair_b, pairs, dt, up, scratch, graph):
+    """Which pairs touch at the predicted poses (graph.touching) and the support edges between
+    their bodies (graph.edge_from -> edge_to, lower to upper, both ways for side contacts);
+    returns the number of edges."""
+    edges = 0
+    for k in range(pairs):
+        a, b = pair_a[k], pair_b[k]
+        graph.touching[k] = find_pair_contacts(state, model, geo, w, a, b, dt, scratch.lookahead,
+                                               GRAPH_MARGIN, scratch) > 0
+        if not graph.touching[k] or model.motion[b] != DYNAMIC:
+            continue  # b is the ground or a gripper: a rests on level 0
+        rise = (scratch.normal[0, 0] * up[0] + scratch.normal[0, 1] * up[1]
+                + scratch.normal[0, 2] * up[2])
+        if rise > -SIDE_CONTACT:  # b below a (or beside it)
+            graph.edge_from[edges], graph.edge_to[edges] = b, a
+            edges += 1
+        if rise < SIDE_CONTACT:  # a below b (or beside it)
+            graph.edge_from[edges], graph.edge_to[edges] = a, b
+            edges += 1
+    return edges
+
+
+@kernel
+def propagate_world_shock(state, model, geo, w, pair_a, pair_b, pairs, accumulated, dt, up,
+                          sweeps, scratch, wide, graph):
+    """The shock-propagation phase for world w (see the module docstring).
+
+    up: (3,) unit vector against gravity; sweeps: passes over each level; batched work arrays:
+    scratch, a Scratch for one pair's contacts, wide, one with room for a body's contacts with
+    all its supports, and graph, a Graph."""
+    n = state.position.shape[1]
+    scratch, wide, graph = world_scratch(scratch, w), world_scratch(wide, w), world_graph(graph, w)
+    for c in range(3):
+        scratch.lookahead[c] = 0.0
+    edges = build_contact_graph(state, model, geo, w, pair_a, pair_b, pairs, dt, up, scratch,
+                                graph)
+    contact_levels(n, model.motion, edges, graph)
+    pairs_by_body(n, pair_a, pair_b, pairs, graph)
+    level, by_level = graph.level, graph.by_level
+    counting_sort(level, n, n + 1, graph.counts, by_level)
+    start = 0
+    while start < n:
+        current = level[by_level[start]]
+        end = start
+        while end < n and level[by_level[end]] == current:
+            end += 1
+        if current > 0:
+            for _ in range(sweeps):
+                applied = 0
+                # each body of the level against all its frozen supports at once
+                for s in range(start, end):
+                    applied += resolve_supported_body(state, model, geo, w, by_level[s], current,
+                                                      pair_a, pair_b, dt, scratch, wide, graph,
+                                                      accumulated)
+                # then the pairs inside the level, both bodies movable
+                for k in range(pairs):
+                    a, b = pair_a[k], pair_b[k]
+                    if graph.touching[k] and level[a] == current and level[b] == current:
+                        applied += resolve_pair(state, model, geo, w, k, a, b, dt,
+                                                scratch.lookahead, SHOCK, 0.0, True, True,
+                                                scratch, accumulated)
+                if applied == 0:
+                    break  # another sweep would find the same state and do nothing too
+        start = end
 
 
 @kernel(parallel=True)
 def propagate_shock(state, model, geo, pair_a, pair_b, pair_count, pair_impulse, dt, up, sweeps,
-                    capacity, wide_capacity):
-    """The shock-propagation phase for every world (see the module docstring).
-
-    up: (3,) unit vector against gravity; sweeps: passes over each level; capacity: the most
-    contacts of one pair; wide_capacity: room for one body's contacts with all its supports."""
-    num_worlds, n = state.position.shape[0], state.position.shape[1]
-    lookahead = np.zeros(3)
-    for w in prange(num_worlds):
-        scratch = make_scratch(n, capacity)
-        wide = make_scratch(n, wide_capacity)
-        pairs = pair_count[w]
-        touching = np.zeros(pairs, dtype=np.bool_)
-        edge_from = np.empty(2 * pairs, dtype=np.int64)
-        edge_to = np.empty(2 * pairs, dtype=np.int64)
-        edges = 0
-        for k in range(pairs):
-            a, b = pair_a[w, k], pair_b[w, k]
-            if find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, GRAPH_MARGIN,
-                                  scratch) == 0:
-                continue
-            touching[k] = True
-            if model.motion[b] != DYNAMIC:
-                continue  # b is the ground or a gripper: a rests on level 0
-            rise = (scratch.normal[0, 0] * up[0] + scratch.normal[0, 1] * up[1]
-                    + scratch.normal[0, 2] * up[2])
-            if rise > -SIDE_CONTACT:  # b below a (or beside it)
-                edge_from[edges], edge_to[edges] = b, a
-                edges += 1
-            if rise < SIDE_CONTACT:  # a below b (or beside it)
-                edge_from[edges], edge_to[edges] = a, b
-                edges += 1
-        level = np.empty(n, dtype=np.int64)
-        contact_levels(n, model.motion, edge_from, edge_to, edges, level)
-        body_pair_start, body_pairs = pairs_by_body(n, pair_a[w], pair_b[w], pairs, touching)
-        by_level = np.argsort(level, kind="mergesort")
-        start = 0
-        while start < n:
-            current = level[by_level[start]]
-            end = start
-            while end < n and level[by_level[end]] == current:
-                end += 1
-            if current > 0:
-                for _ in range(sweeps):
-                    # each body of the level against all its frozen supports at once
-                    for s in range(start, end):
-                        resolve_supported_body(state, model, geo, w, by_level[s], level, current,
-                                               touching, pair_a, pair_b, body_pair_start,
-                                               body_pairs, dt, lookahead, scratch, wide,
-                                               pair_impulse[w])
-                    # then the pairs inside the level, both bodies movable
-                    for k in range(pairs):
-                        a, b = pair_a[w, k], pair_b[w, k]
-                        if touching[k] and level[a] == current and level[b] == current:
-                            resolve_pair(state, model, geo, w, k, a, b, dt, lookahead, SHOCK,
-                                         0.0, True, True, scratch, pair_impulse[w])
-            start = end
+                    scratch, wide, graph):
+    """``propagate_world_shock`` for every world; arrays with a leading world axis B."""
+    for w in prange(state.position.shape[0]):
+        propagate_world_shock(state, model, geo, w, pair_a[w], pair_b[w], pair_count[w],
+                              pair_impulse[w], dt, up, sweeps, scratch, wide, graph)

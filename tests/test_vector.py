@@ -1,0 +1,143 @@
+"""The natively batched envs (envs/vector.py), the SB3 adapter, and the one-call step they use."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import rigid_gym as rg
+from rigid_gym.envs import ENV_IDS
+from rigid_gym.envs.scripted import scripted_policy
+from rigid_gym.report.scenes import cube_stack, pile
+
+TASK_IDS = [i for i in ENV_IDS if "Dense" not in i]
+
+
+@pytest.mark.parametrize("scene", [cube_stack(5), pile(30)], ids=["stack", "pile"])
+def test_one_kernel_call_equals_the_phase_by_phase_pipeline(scene):
+    """World.step(n) runs every phase of n steps in one kernel call; World(profile=True) runs
+    each phase as its own call and times it. Same arithmetic, so the same bits, batched or
+    not (a pile exercises pair-buffer growth, shock levels and side contacts)."""
+    for num_worlds in (None, 3):
+        fused = rg.World(scene, dt=1 / 240, num_worlds=num_worlds)
+        phased = rg.World(scene, dt=1 / 240, num_worlds=num_worlds, profile=True)
+        fused.step(150)
+        for _ in range(3):
+            phased.step(50)
+        for name in ("position", "orientation", "velocity", "angular_velocity"):
+            np.testing.assert_array_equal(getattr(fused, name), getattr(phased, name))
+        assert phased.profile()["broad_phase"]["calls"] == 150
+        assert fused.profile()["broad_phase"]["calls"] == 0
+
+
+@pytest.mark.parametrize("env_id", TASK_IDS)
+def test_each_copy_equals_a_single_env_with_its_seed(env_id):
+    """Copy i of make_vec(seed=s) plays exactly what gym.make reset with s + i plays, through
+    grips, throws and two same-step autoresets (120 steps of the scripted policy)."""
+    num_envs = 3
+    envs = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point")
+    singles = [gym.make(env_id) for _ in range(num_envs)]
+    observation, _ = envs.reset(seed=10)
+    single_obs = [env.reset(seed=10 + i)[0] for i, env in enumerate(singles)]
+    for i in range(num_envs):
+        np.testing.assert_array_equal(observation["observation"][i], single_obs[i]["observation"])
+    policy = scripted_policy(singles[0])
+    endings = 0
+    for _ in range(120):
+        actions = np.stack([policy({k: v[i] for k, v in observation.items()})
+                            for i in range(num_envs)])
+        observation, reward, terminated, truncated, infos = envs.step(actions)
+        for i, env in enumerate(singles):
+            expected, expected_reward, done, cut, info = env.step(actions[i])
+            assert (terminated[i], truncated[i]) == (done, cut)
+            if done or cut:
+                endings += 1
+                np.testing.assert_array_equal(infos["final_obs"][i]["observation"],
+                                              expected["observation"])
+                assert infos["final_info"]["is_success"][i] == info["is_success"]
+                expected, _ = env.reset()
+            np.testing.assert_array_equal(observation["observation"][i], expected["observation"])
+            np.testing.assert_array_equal(observation["desired_goal"][i],
+                                          expected["desired_goal"])
+            assert reward[i] == expected_reward
+    assert endings >= num_envs
+
+
+def test_vector_env_refuses_what_it_cannot_do():
+    with pytest.raises(ValueError, match="num_envs must be an int >= 1"):
+        gym.make_vec("rigid_gym/Push-v0", num_envs=0, vectorization_mode="vector_entry_point")
+    with pytest.raises(ValueError, match="cannot include 'size'"):
+        gym.make_vec("rigid_gym/Push-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                     randomize=True)
+    with pytest.raises(ValueError, match="render_mode must be None"):
+        gym.make_vec("rigid_gym/Push-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                     render_mode="rgb_array")
+    envs = gym.make_vec("rigid_gym/Push-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    envs.reset(seed=0)
+    with pytest.raises(ValueError, match=r"actions must have shape \(2, 3\)"):
+        envs.step(np.zeros(3))
+
+
+def test_materials_can_be_randomized_per_copy():
+    envs = gym.make_vec("rigid_gym/Push-v0", num_envs=4, vectorization_mode="vector_entry_point",
+                        randomize={"mass": (0.5, 2.0), "friction": (0.5, 1.5)})
+    envs.reset(seed=3)
+    masses = 1.0 / envs.unwrapped.world.model.inverse_mass[:, envs.unwrapped.envs[0].cubes[0]]
+    assert len(set(masses.round(12))) == 4
+    assert np.all((masses >= 0.05) & (masses <= 0.2))
+
+
+def test_world_load_refuses_another_structure():
+    world = rg.World(cube_stack(2), num_worlds=2)
+    with pytest.raises(ValueError, match="differs in shape or motion"):
+        world.load(_bigger_stack(), 1)
+
+
+def _bigger_stack():
+    scene = rg.Scene()
+    scene.add_ground()
+    for k in range(2):
+        scene.add_body(rg.Box((0.03, 0.03, 0.03)), mass=0.1, position=(0, 0, 0.03 + 0.06 * k))
+    return scene
+
+
+@pytest.mark.parametrize("algorithm", ["sac_her", "ppo"])
+def test_sb3_trains_on_the_batched_env(algorithm):
+    """SAC + HER (compute_reward through env_method) and PPO learn from SB3VecEnv for a few
+    hundred steps, with episodes ending (terminal_observation) along the way."""
+    sb3 = pytest.importorskip("stable_baselines3")
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    from rigid_gym.agents.vec_env import SB3VecEnv
+
+    env_id = "rigid_gym/Push-v0" if algorithm == "sac_her" else "rigid_gym/PushDense-v0"
+    envs = VecMonitor(SB3VecEnv(gym.make_vec(env_id, num_envs=4)))
+    if algorithm == "sac_her":
+        model = sb3.SAC("MultiInputPolicy", envs, replay_buffer_class=sb3.HerReplayBuffer,
+                        learning_starts=200, batch_size=32, seed=0,
+                        policy_kwargs=dict(net_arch=[16, 16]))
+    else:
+        model = sb3.PPO("MultiInputPolicy", envs, n_steps=64, batch_size=64, seed=0,
+                        policy_kwargs=dict(net_arch=[16, 16]))
+    model.learn(600)
+    assert model.num_timesteps >= 600
+    assert len(model.ep_info_buffer) >= 8  # 600 steps of 4 envs: episodes of 50 ended
+    assert all(np.isfinite(info["r"]) for info in model.ep_info_buffer)
+
+
+def test_sb3_adapter_reports_the_last_observation_of_an_episode():
+    pytest.importorskip("stable_baselines3")
+    from rigid_gym.agents.vec_env import SB3VecEnv
+
+    envs = SB3VecEnv(gym.make_vec("rigid_gym/Push-v0", num_envs=2))
+    envs.seed(5)
+    first = envs.reset()
+    assert first["observation"].shape == (2, 24)
+    for step in range(50):
+        observation, reward, done, infos = envs.step(np.zeros((2, 3), dtype=np.float32))
+    assert done.all()
+    assert all(info["TimeLimit.truncated"] for info in infos)
+    assert all(info["terminal_observation"]["observation"].shape == (24,) for info in infos)
+    assert not np.array_equal(observation["desired_goal"][0],
+                              infos[0]["terminal_observation"]["desired_goal"])
+    assert envs.env_method("compute_reward", observation["achieved_goal"],
+                           observation["desired_goal"], infos, indices=[0])[0].shape == (2,)
