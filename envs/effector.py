@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigid_gym import quaternion as quat
+from rigid_gym.kernels.footprint import lowest_centre
 from rigid_gym.shapes import Box
 
 STEP_DISTANCE = 0.05
@@ -31,8 +32,6 @@ PAD_HALF_EXTENTS = (0.02, 0.02, 0.015)
 """Half extents (m) of the gripper's pad."""
 GRIP_MARGIN = 0.004
 """m: how close the pad must be to an object for suction to grip it."""
-FOOTPRINT_SLACK = 1e-3
-"""m: footprints must overlap by more than this for a body to count as under the gripper."""
 
 
 @dataclass(frozen=True)
@@ -66,6 +65,9 @@ class SuctionGripper:
         self.held: int | None = None  # index into self.objects
         self._offset_position = np.zeros(3)  # held object's centre in the gripper frame, m
         self._offset_orientation = np.array([1.0, 0.0, 0.0, 0.0])
+        # the pad and the held object at the target: centres, rotations, half extents
+        self._parts = (np.zeros((2, 3)), np.zeros((2, 3, 3)),
+                       np.array([PAD_HALF_EXTENTS, PAD_HALF_EXTENTS], dtype=np.float64))
 
     @property
     def position(self) -> np.ndarray:
@@ -117,50 +119,21 @@ class SuctionGripper:
 
     def _lowest_centre(self, target: np.ndarray) -> float:
         """The lowest z the gripper's centre may take at ``target``'s x, y: where it, or the
-        object it holds, would rest on the table or on the top of a free object under it."""
+        object it holds, would rest on the table or on the top of a free object under it
+        (``kernels/footprint.lowest_centre``)."""
         w = self.world
         shift = target - self.position
-        column = [(target, w.rotation[self.body], PAD_HALF_EXTENTS)]
+        parts = self._parts
+        parts[0][0] = target
+        parts[1][0] = w.rotation[self.body]
+        count = 1
         if self.held is not None:
             body = self.objects[self.held]
-            column.append((w.position[body] + shift, w.rotation[body],
-                           self.half_extents[self.held]))
-        lowest = -np.inf
-        for centre, rotation, half in column:
-            part = box_corners(centre, rotation, half)
-            height = target[2] - part[:, 2].min()  # from this part's bottom to the pad's centre
-            lowest = max(lowest, height)  # resting on the table (z = 0)
-            for k, body in enumerate(self.objects):
-                if k == self.held:
-                    continue
-                other = box_corners(w.position[body], w.rotation[body], self.half_extents[k])
-                top = other[:, 2].max()
-                below = top <= part[:, 2].min() - shift[2] + FOOTPRINT_SLACK
-                if below and footprints_overlap(part, rotation, other, w.rotation[body]):
-                    lowest = max(lowest, top + height)
-        return lowest
-
-
-CORNER_SIGNS = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
-"""(8, 3): a box's corners in units of its half extents."""
-
-
-def box_corners(centre: np.ndarray, rotation: np.ndarray, half_extents) -> np.ndarray:
-    """(8, 3) corners, m, of a box at ``centre`` (3,) with ``rotation`` (3, 3)."""
-    return centre + (CORNER_SIGNS * np.asarray(half_extents)) @ rotation.T
-
-
-def footprints_overlap(corners_a, rotation_a, corners_b, rotation_b) -> bool:
-    """Whether two boxes' shadows on the table (their corners (8, 3) projected on x, y)
-    overlap by more than FOOTPRINT_SLACK: separating axes are x, y and the normals of the
-    projected box edges."""
-    axes = [np.array([1.0, 0.0]), np.array([0.0, 1.0])]
-    for rotation in (rotation_a, rotation_b):
-        for edge in rotation[:2].T:  # each box axis, projected on x, y
-            if np.linalg.norm(edge) > 1e-9:
-                axes.append(np.array([-edge[1], edge[0]]) / np.linalg.norm(edge))
-    for axis in axes:
-        a, b = corners_a[:, :2] @ axis, corners_b[:, :2] @ axis
-        if min(a.max(), b.max()) - max(a.min(), b.min()) <= FOOTPRINT_SLACK:
-            return False
-    return True
+            parts[0][1] = w.position[body] + shift
+            parts[1][1] = w.rotation[body]
+            parts[2][1] = self.half_extents[self.held]
+            count = 2
+        positions, rotations = w.position, w.rotation
+        return lowest_centre(float(target[2]), float(shift[2]), parts[0], parts[1], parts[2],
+                             count, positions[self.objects], rotations[self.objects],
+                             self.half_extents, -1 if self.held is None else self.held)

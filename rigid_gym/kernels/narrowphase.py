@@ -313,7 +313,7 @@ def sample_in_field(geo, k, xs, rs, gf, xf, rf, sign, margin, points, normals, d
     return 1
 
 
-@kernel
+@kernel(inline=True)
 def collide_samples_with_field(geo, gs, xs, rs, gf, xf, rf, sign, margin, points, normals, depths,
                                index, capacity):
     """Surface samples of box or mesh geom gs (pose xs, rs) in the phi of geom gf (pose xf, rf);
@@ -365,7 +365,7 @@ def geom_pose(geo, g, x, r, out_x, out_r):
         out_r[0, c], out_r[1, c], out_r[2, c] = cx, cy, cz
 
 
-@kernel
+@kernel(inline=True)
 def collide_box_geoms(geo, ga, xa, ra, gb, xb, rb, margin, points, normals, depths, index,
                       capacity, scratch):
     """Box geom ga against box geom gb in closed form (``boxbox.collide_boxes``)."""

@@ -128,7 +128,7 @@ def solve_dense(m, rhs, size, out):
     return True
 
 
-@kernel
+@kernel(inline=True)
 def centre_of_pressure_inside(scratch, seed, count, cx, cy, cz, dx, dy, dz):
     """True when the centre of pressure c + d lies within the patch (its support along d reaches
     |d|; exact for the segments and rectangles of box faces and edges up to a slight leniency
@@ -144,7 +144,7 @@ def centre_of_pressure_inside(scratch, seed, count, cx, cy, cz, dx, dy, dz):
     return length <= reach
 
 
-@kernel
+@kernel(inline=True)
 def patch_shape(scratch, seed, count, cx, cy, cz, t1x, t1y, t1z, t2x, t2y, t2z):
     """Kind of the patch (POINT, EDGE or FACE), its direction (for an edge) and the mean
     distance of its points from the centroid c."""
@@ -196,7 +196,7 @@ def apply_wrench(state, model, w, i, sign, jx, jy, jz, mx, my, mz, rx, ry, rz):
     state.angular_velocity[w, i, 2] = oz
 
 
-@kernel
+@kernel(inline=True)
 def resolve_patch(state, model, w, a, b, movable_a, movable_b, scratch, seed, count, e, mu,
                   prior_x, prior_y, prior_z):
     """Apply the patch wrench of the module docstring to the pair (a, b) for the patch whose
@@ -391,7 +391,7 @@ def apply_pair(state, model, w, a, b, movable_a, movable_b, jx, jy, jz, mx, my, 
         apply_wrench(state, model, w, b, -1.0, jx, jy, jz, mx, my, mz, rbx, rby, rbz)
 
 
-@kernel
+@kernel(inline=True)
 def spin_friction(state, model, w, a, b, movable_a, movable_b, nx, ny, nz, limit):
     """Angular impulse t n on a (and -t n on b) that stops their relative spin about n,
     |t| <= limit (N m s): torsional friction of a patch."""

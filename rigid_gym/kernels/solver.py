@@ -124,7 +124,7 @@ def predict_pose(state, model, w, i, dt, lookahead, scratch):
     rotation_from_quaternion(q, scratch.rotation[i])
 
 
-@kernel
+@kernel(inline=True)
 def find_pair_contacts(state, model, geo, w, a, b, dt, lookahead, margin, scratch):
     """Contacts of bodies a, b at their predicted poses, deepest first (those deeper than
     -margin, m); returns the count."""
@@ -161,7 +161,7 @@ def same_motion(state, w, p, q):
             and abs(state.velocity[w, p, 2] - pz - state.velocity[w, q, 2] + qz) <= SAME_MOTION)
 
 
-@kernel
+@kernel(inline=True)
 def gather_patch(state, w, scratch, seed, count):
     """Put every unassigned contact whose normal is within PATCH_COS of contact ``seed``'s,
     and whose partner body moves rigidly with the seed's, into the patch ``seed``
@@ -182,7 +182,7 @@ def gather_patch(state, w, scratch, seed, count):
     return approaching
 
 
-@kernel
+@kernel(inline=True)
 def approach_weighted_centre(scratch, seed, count):
     """Centroid and mean normal of the patch's approaching contacts, each weighted by its
     approach speed -v_n, and their mean distance from that centroid (m)."""
