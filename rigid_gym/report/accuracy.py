@@ -124,20 +124,22 @@ def phase_saving(case: Case, dt: float, repeats: int) -> dict:
     """What ``SolverConfig.for_scene`` left out of ``case`` and what that saved at ``dt``:
     {'left_out': [phase names], 'cost': s/s with for_scene, 'cost_all_on': s/s with every
     phase on (``SolverConfig()``), 'error', 'error_all_on': the first metric of each,
-    'profile': ``World.profile()`` of the for_scene world}."""
+    'profile': ``World.profile()`` of the for_scene world, run again phase by phase}."""
     results = {}
     for name, config in (("for_scene", None), ("all_on", rg.SolverConfig())):
         world = world_for(case, dt, config=config)
         errors, cost = measure(case, world, repeats)
         results[name] = (world, errors[0], cost)
     world = results["for_scene"][0]
+    profiled = rg.World(world.scene, dt=dt, config=world.config, profile=True)
+    profiled.step(world.steps)
     gravity = bool(np.any(world.model.gravity))
     on = world.config.phases(gravity)
     all_on = rg.SolverConfig().phases(gravity)
     return {"left_out": [p for p in on if all_on[p] and not on[p]],
             "cost": results["for_scene"][2], "cost_all_on": results["all_on"][2],
             "error": results["for_scene"][1], "error_all_on": results["all_on"][1],
-            "profile": world.profile()}
+            "profile": profiled.profile()}
 
 
 # -- mass properties ---------------------------------------------------------------------------

@@ -106,7 +106,10 @@ def energy_scale(world: rg.World) -> float:
 
 def simulate(world: rg.World, seconds: float, probes: int = PROBES) -> Run:
     """Step ``world`` for ``seconds`` (s), watching energy every step and overlap ``probes``
-    times. Stops early (finite=False) if the state becomes non-finite."""
+    times, phase by phase so that ``world.profile()`` has each phase's share (the cost then
+    includes a kernel call per phase). Stops early (finite=False) if the state becomes
+    non-finite."""
+    world.profiling = True
     steps = int(round(seconds / world.dt))
     if steps < 1:
         raise ValueError(f"simulate: seconds must cover at least one step of {world.dt} s, "
