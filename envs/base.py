@@ -70,7 +70,7 @@ class RigidGymEnv(gym.Env):
     """Base of every task; see a task's docstring (PushEnv, StackEnv, ThrowEnv) for its tables.
 
     Subclasses set ``num_cubes``, ``has_grip`` and ``goal_size`` and implement
-    ``_place_cubes``, ``_add_fixtures``, ``_sample_goal``, ``_achieved_goal`` and
+    ``_place_cubes``, ``_add_fixtures``, ``_sample_goal`` and
     ``goal_reached``.
     """
 
@@ -234,24 +234,23 @@ class RigidGymEnv(gym.Env):
 
     def _observation(self) -> dict:
         w = self.world
-        g = self.gripper
-        parts = [g.position, g.velocity]
-        if self.has_grip:
-            parts.append([float(g.held is not None)])
-        for body in self.cubes:
-            parts += [w.position[body], w.position[body] - g.position,
-                      w.rotation[body][:, :2].T.ravel(), w.velocity[body],
-                      w.angular_velocity[body]]
-        vector = np.concatenate([np.ravel(p) for p in parts])
+        held = None if not self.has_grip else np.array([self.gripper.held is not None])
+        vectors, achieved = observe(w.position[None], w.velocity[None], w.rotation[None],
+                                    w.angular_velocity[None], self.gripper.body, self.cubes, held)
+        return self._observation_from(vectors[0], achieved[0])
+
+    def _observation_from(self, vector: np.ndarray, achieved: np.ndarray) -> dict:
+        """The observation dict from ``observe``'s rows for this env: checked finite, noise
+        added (``observation_noise``, from this env's np_random)."""
         if not np.all(np.isfinite(vector)):  # a solver failure: say so here, not in a network
             bad = np.flatnonzero(~np.isfinite(vector)).tolist()
             raise RuntimeError(f"{type(self).__name__}: the simulation produced non-finite "
-                               f"state (observation entries {bad}) at t = {w.time:.3f} s")
+                               f"state (observation entries {bad}) at t = {self.world.time:.3f} s")
         if self.observation_noise > 0.0:
             vector = vector + self.np_random.normal(0.0, self.observation_noise, vector.shape)
         return {
             "observation": vector.astype(np.float32),
-            "achieved_goal": self._achieved_goal().astype(np.float32),
+            "achieved_goal": achieved.astype(np.float32),
             "desired_goal": self.goal.astype(np.float32),
         }
 
@@ -281,9 +280,6 @@ class RigidGymEnv(gym.Env):
     def _sample_goal(self) -> np.ndarray:
         raise NotImplementedError
 
-    def _achieved_goal(self) -> np.ndarray:
-        raise NotImplementedError
-
     def goal_reached(self, achieved_goal: np.ndarray, desired_goal: np.ndarray) -> np.ndarray:
         """(..., goal_size) goals -> (...) bool."""
         raise NotImplementedError
@@ -291,6 +287,25 @@ class RigidGymEnv(gym.Env):
     def _add_markers(self, renderer) -> None:
         """Goal markers for rgb_array frames (translucent: MARKER_ALPHA)."""
         raise NotImplementedError
+
+
+def observe(position, velocity, rotation, angular_velocity, gripper: int, cubes,
+            held=None) -> tuple[np.ndarray, np.ndarray]:
+    """Observations and achieved goals of B worlds, float64: ``(B, size)`` and
+    ``(B, 3 * len(cubes))``, from their state (position, velocity, angular_velocity (B, n, 3),
+    rotation (B, n, 3, 3)), the gripper's body index and the cubes'. held: (B,) bool, whether
+    each gripper holds a cube (tasks with a grip), or None. The achieved goal of every task is
+    its cubes' positions."""
+    pad = position[:, gripper]
+    parts = [pad, velocity[:, gripper]]
+    if held is not None:
+        parts.append(np.asarray(held, dtype=np.float64)[:, None])
+    for body in cubes:
+        cube = position[:, body]
+        axes = rotation[:, body, :, :2].transpose(0, 2, 1).reshape(-1, ROTATION_FEATURES)
+        parts += [cube, cube - pad, axes, velocity[:, body], angular_velocity[:, body]]
+    achieved = np.concatenate([position[:, body] for body in cubes], axis=1)
+    return np.concatenate(parts, axis=1), achieved
 
 
 def _randomization_ranges(randomize, where: str) -> dict:

@@ -69,9 +69,6 @@ class PushEnv(RigidGymEnv):
         xy = sample_apart(self.np_random, GOAL_RANGE, [cube], DISTANCE_THRESHOLD)
         return np.array([xy[0], xy[1], self.cube_half[0]])
 
-    def _achieved_goal(self):
-        return self.world.position[self.cubes[0]].copy()
-
     def goal_reached(self, achieved_goal, desired_goal):
         return np.linalg.norm(achieved_goal - desired_goal, axis=-1) < DISTANCE_THRESHOLD
 

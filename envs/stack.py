@@ -75,9 +75,6 @@ class StackEnv(RigidGymEnv):
         bottom, top = self.cube_half
         return np.array([x, y, bottom, x, y, 2.0 * bottom + top])
 
-    def _achieved_goal(self):
-        return np.concatenate([self.world.position[c] for c in self.cubes])
-
     def goal_reached(self, achieved_goal, desired_goal):
         error = achieved_goal - desired_goal
         near = ((np.linalg.norm(error[..., :3], axis=-1) < DISTANCE_THRESHOLD)

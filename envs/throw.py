@@ -111,9 +111,6 @@ class ThrowEnv(RigidGymEnv):
     def _sample_goal(self):
         return self.bin_centre + np.array([0.0, 0.0, self.cube_half[0]])
 
-    def _achieved_goal(self):
-        return self.world.position[self.cubes[0]].copy()
-
     def goal_reached(self, achieved_goal, desired_goal):
         error = np.abs(achieved_goal - desired_goal)
         return ((error[..., 0] <= BIN_INNER_HALF) & (error[..., 1] <= BIN_INNER_HALF)

@@ -20,7 +20,7 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from rigid_gym.envs.base import SOLVER_STEPS, STEP_TIME, RigidGymEnv
+from rigid_gym.envs.base import SOLVER_STEPS, STEP_TIME, RigidGymEnv, observe
 from rigid_gym.envs.push import PushEnv
 from rigid_gym.envs.stack import StackEnv
 from rigid_gym.envs.throw import ThrowEnv
@@ -86,13 +86,19 @@ class RigidGymVectorEnv(VectorEnv):
         return self._stack(observations), infos
 
     def step(self, actions):
-        actions = np.asarray(actions)
+        actions = np.asarray(actions, dtype=np.float64)
         expected = self.action_space.shape
         if actions.shape != expected:
             raise ValueError(f"{type(self).__name__}.step: actions must have shape {expected}, "
                              f"got {actions.shape}")
+        if not np.all(np.isfinite(actions)):
+            bad = sorted(set(np.flatnonzero(~np.all(np.isfinite(actions), axis=1)).tolist()))
+            raise ValueError(f"{type(self).__name__}.step: actions must be finite (NaN and inf "
+                             f"are refused); copies {bad} are not")
+        actions = np.clip(actions, -1.0, 1.0)  # as the single env: outside [-1, 1] is clipped
+        grip = self.envs[0].has_grip
         for env, action in zip(self.envs, actions):
-            env.act(action)
+            env.gripper.command(action[:3], action[3] if grip else None)
         holding = [env.gripper for env in self.envs if env.gripper.held is not None]
         if not holding:
             self.world.step(SOLVER_STEPS)
@@ -102,19 +108,37 @@ class RigidGymVectorEnv(VectorEnv):
                 for gripper in holding:
                     gripper.carry()
         self.elapsed += 1
-        observations, infos = [], {}
-        rewards = np.zeros(self.num_envs)
-        terminated = np.zeros(self.num_envs, dtype=bool)
+        observations, rewards, terminated, successes = self._outcomes()
         truncated = self.elapsed >= self.max_episode_steps
-        for i, env in enumerate(self.envs):
-            observation, rewards[i], terminated[i], _, info = env.outcome()
-            if terminated[i] or truncated[i]:
-                infos = self._add_info(infos, {"final_obs": observation, "final_info": info}, i)
-                observation, info = env.reset()
-                self.elapsed[i] = 0
-            observations.append(observation)
-            infos = self._add_info(infos, info, i)
+        infos = {}
+        for i in np.flatnonzero(terminated | truncated):
+            final_info = {"is_success": bool(successes[i])}
+            infos = self._add_info(infos, {"final_obs": observations[i],
+                                           "final_info": final_info}, i)
+            observations[i], reset_info = self.envs[i].reset()
+            successes[i] = reset_info["is_success"]
+            self.elapsed[i] = 0
+        infos["is_success"] = successes  # every copy's, as _add_info would batch them
+        infos["_is_success"] = np.ones(self.num_envs, dtype=bool)
         return self._stack(observations), rewards, terminated, truncated, infos
+
+    def _outcomes(self):
+        """Every copy's step result at once: observations (list of dicts), rewards (B,),
+        terminated (B,) and successes (B,) bool, as ``RigidGymEnv.outcome`` gives them."""
+        first = self.envs[0]
+        s = self.world
+        held = np.array([env.gripper.held is not None for env in self.envs]) \
+            if first.has_grip else None
+        vectors, achieved = observe(s.position, s.velocity, s.rotation, s.angular_velocity,
+                                    first.gripper.body, first.cubes, held)
+        observations = [env._observation_from(vectors[i], achieved[i])
+                        for i, env in enumerate(self.envs)]
+        achieved32 = np.stack([o["achieved_goal"] for o in observations]).astype(np.float64)
+        desired32 = np.stack([o["desired_goal"] for o in observations]).astype(np.float64)
+        successes = np.asarray(first.goal_reached(achieved32, desired32), dtype=bool)
+        rewards = np.asarray(first.compute_reward(achieved32, desired32), dtype=np.float64)
+        terminated = successes & first.terminate_on_success
+        return observations, rewards, terminated, successes
 
     def compute_reward(self, achieved_goal, desired_goal, info=None):
         """The task's reward for goals of shape (..., goal_size) (as the single env's)."""
