@@ -83,7 +83,7 @@ class SuctionGripper:
         target = self.workspace.clip(self.position + STEP_DISTANCE * motion)
         target[2] = max(target[2], min(self.position[2], self._lowest_centre(target)))
         velocity = (target - self.position) / self.step_time
-        self.world.set_velocity(self.body, velocity=velocity, angular_velocity=np.zeros(3))
+        self.world.set_velocity(self.body, velocity=velocity)  # it never turns: omega stays 0
         if grip is not None and grip > 0.0 and self.held is None:
             self._try_grip()
         self.carry()  # the held object moves with the velocity of the step being started
