@@ -169,12 +169,7 @@ class RigidGymEnv(gym.Env):
 
     def step(self, action):
         self.act(action)
-        if self.gripper.held is None:
-            self.world.step(SOLVER_STEPS)  # one call: nothing to carry between solver steps
-        else:
-            for _ in range(SOLVER_STEPS):
-                self.world.step(1)
-                self.gripper.carry()
+        self.world.step(SOLVER_STEPS)  # one kernel call, held objects carried in it
         return self.outcome()
 
     def act(self, action) -> None:

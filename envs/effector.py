@@ -5,9 +5,10 @@ velocity, and the solver moves it and lets it push whatever it meets. Two things
 plain physics, and both stand for the robot arm that is not simulated:
 
 * **Suction.** Closing the grip while the pad touches an object (a contact within
-  ``GRIP_MARGIN``) attaches that object rigidly at its current offset; while held it is carried
-  with the gripper's pose and velocity at every solver step. Opening releases it with the
-  gripper's velocity at that instant (the velocity of the step being started).
+  ``GRIP_MARGIN``) attaches that object rigidly at its current offset (``World.attach``):
+  while held it is put at that offset, with the gripper's velocity, before every solver step
+  and after the last. Opening releases it with the gripper's velocity at that instant (the
+  velocity of the step being started).
 * **Force limit.** An arm stops when it presses a body into the table; a kinematic body would
   not (it would crush the body through the table, which no solver can resolve). So a downward
   move stops where the lowest point of the gripper (or of the object it holds) meets the top
@@ -22,7 +23,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigid_gym import quaternion as quat
 from rigid_gym.kernels.footprint import lowest_centre
 from rigid_gym.shapes import Box
 
@@ -63,8 +63,6 @@ class SuctionGripper:
         self.step_time = step_time
         self.workspace = workspace
         self.held: int | None = None  # index into self.objects
-        self._offset_position = np.zeros(3)  # held object's centre in the gripper frame, m
-        self._offset_orientation = np.array([1.0, 0.0, 0.0, 0.0])
         # the pad and the held object at the target: centres, rotations, half extents
         self._parts = (np.zeros((2, 3)), np.zeros((2, 3, 3)),
                        np.array([PAD_HALF_EXTENTS, PAD_HALF_EXTENTS], dtype=np.float64))
@@ -86,21 +84,9 @@ class SuctionGripper:
         self.world.set_velocity(self.body, velocity=velocity)  # it never turns: omega stays 0
         if grip is not None and grip > 0.0 and self.held is None:
             self._try_grip()
-        self.carry()  # the held object moves with the velocity of the step being started
-        if grip is not None and grip <= 0.0:
+        elif grip is not None and grip <= 0.0 and self.held is not None:
+            self.world.detach(self.objects[self.held])  # leaves with the pad's new velocity
             self.held = None
-
-    def carry(self) -> None:
-        """Put the held object (if any) at its offset from the gripper, moving with it. Called
-        before every solver step of an env step and once after the last."""
-        if self.held is None:
-            return
-        w = self.world
-        q = w.orientation[self.body]
-        body = self.objects[self.held]
-        w.set_pose(body, position=self.position + quat.rotate(q, self._offset_position),
-                   orientation=quat.multiply(q, self._offset_orientation))
-        w.set_velocity(body, velocity=self.velocity, angular_velocity=np.zeros(3))
 
     # -- helpers -------------------------------------------------------------------------------
 
@@ -110,10 +96,7 @@ class SuctionGripper:
             pair = ((contacts.body_a == body) & (contacts.body_b == self.body)) | (
                 (contacts.body_a == self.body) & (contacts.body_b == body))
             if np.any(pair):
-                w = self.world
-                q_inv = quat.conjugate(w.orientation[self.body])
-                self._offset_position = quat.rotate(q_inv, w.position[body] - self.position)
-                self._offset_orientation = quat.multiply(q_inv, w.orientation[body])
+                self.world.attach(body, self.body)  # carried from now on (World.attach)
                 self.held = k
                 return
 

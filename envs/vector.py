@@ -99,14 +99,7 @@ class RigidGymVectorEnv(VectorEnv):
         grip = self.envs[0].has_grip
         for env, action in zip(self.envs, actions):
             env.gripper.command(action[:3], action[3] if grip else None)
-        holding = [env.gripper for env in self.envs if env.gripper.held is not None]
-        if not holding:
-            self.world.step(SOLVER_STEPS)
-        else:  # held objects move with their grippers between solver steps
-            for _ in range(SOLVER_STEPS):
-                self.world.step(1)
-                for gripper in holding:
-                    gripper.carry()
+        self.world.step(SOLVER_STEPS)  # every copy in one kernel call, held objects carried in it
         self.elapsed += 1
         observations, rewards, terminated, successes = self._outcomes()
         truncated = self.elapsed >= self.max_episode_steps

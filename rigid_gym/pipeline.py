@@ -97,7 +97,7 @@ def advance(world, steps: int) -> None:
     while True:
         work.fit_pairs(pairs.pair_a.shape[1])
         args = (world.dt, s, m, geo, pairs.pairs, work.scratch, work.wide, work.graph,
-                world.settings)
+                world.settings, world.attached)
         if world.num_worlds == 1:
             done[0] += step_world(0, steps - done[0], *args)
         else:
@@ -107,6 +107,18 @@ def advance(world, steps: int) -> None:
         pairs.grow_pairs()
 
 
+def place_attached(world, index: int | None = None) -> None:
+    """Put every attached body (``World.attach``) at its offset from its parent, in every
+    world or in world ``index`` only."""
+    s, a = world.state, world.attached
+    args = (s.position, s.orientation, s.velocity, s.angular_momentum, s.angular_velocity,
+            s.rotation, a.parent, a.offset_position, a.offset_orientation)
+    if index is not None:
+        integrate.place_attached(index, *args)
+    else:
+        for_worlds(integrate.place_attached_bodies, world.num_worlds)(*args)
+
+
 def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
     """Advance every world of ``world`` (a :class:`rigid_gym.World`) by ``dt`` seconds, one
     kernel call per phase, timing each phase into ``profile``."""
@@ -114,6 +126,7 @@ def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
     # light kernels run serially for a single world (waking the thread pool costs more than
     # their work); the solver phases run their parallel code on the calling thread alone
     k = lambda compiled: for_worlds(compiled, world.num_worlds)  # noqa: E731
+    place_attached(world)  # held bodies start the step at their place
     gravity = float(np.linalg.norm(m.gravity))
     on = config.phases(gravity > 0.0)
     # 0. broad phase: every pair whose boxes may meet within this step (velocities included);

@@ -25,6 +25,7 @@ from rigid_gym.config import SolverConfig
 from rigid_gym.kernels import integrate
 from rigid_gym.kernels.integrate import DYNAMIC, STATIC
 from rigid_gym.kernels.jit import calling_thread_only, for_worlds
+from rigid_gym.kernels.step import Attachments
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Compound, Mesh
 
@@ -109,6 +110,10 @@ class World:
             raise ValueError(f"World.profile: must be True or False, got {profile!r}")
         self.profiling = profile
         self.state = _build_state(scene, self.num_worlds)
+        n = len(scene)
+        self.attached = Attachments(np.full((self.num_worlds, n), -1, dtype=np.int32),
+                                    np.zeros((self.num_worlds, n, 3)),
+                                    np.zeros((self.num_worlds, n, 4)))
         self._refresh_derived()
         self._initial_state = tuple(a.copy() for a in self.state)
         self.steps = 0
@@ -131,6 +136,7 @@ class World:
             for _ in range(int(n)):
                 pipeline.step(self, self.config, self.dt, self._profile)
                 self.steps += 1
+            pipeline.place_attached(self)
 
     def reset(self, world: int | None = None) -> None:
         """Put every world (or only ``world``) back to the scene's initial state; the step
@@ -138,6 +144,7 @@ class World:
         worlds = self._worlds(world, "reset")
         for current, initial in zip(self.state, self._initial_state):
             current[worlds] = initial[worlds]
+        self.attached.parent[worlds] = -1
         if world is None:
             self.steps = 0
 
@@ -158,6 +165,35 @@ class World:
             current[w] = new[0]
         for current, new in zip(self.state, _build_state(scene, 1)):
             current[w] = new[0]
+        self.attached.parent[w] = -1
+
+    def attach(self, body: int, parent: int, world: int | None = None) -> None:
+        """Hold dynamic ``body`` rigidly at its current pose relative to kinematic ``parent``
+        (a gripper): before every step and after the last it is put there, moving with the
+        parent's velocity and not turning; in between, the step acts on it as on any body."""
+        i, p = self._body(body, "attach"), self._body(parent, "attach")
+        if self.model.motion[i] != DYNAMIC or self.model.motion[p] == DYNAMIC:
+            raise ValueError(f"World.attach: body {i} must be dynamic and parent {p} kinematic "
+                             "or static")
+        worlds = self._worlds(world, "attach")
+        s = self.state
+        inverse = quat.conjugate(s.orientation[worlds, p])
+        self.attached.offset_position[worlds, i] = np.einsum(
+            "...ji,...j->...i", s.rotation[worlds, p], s.position[worlds, i] - s.position[worlds, p])
+        self.attached.offset_orientation[worlds, i] = quat.multiply(inverse, s.orientation[worlds, i])
+        self.attached.parent[worlds, i] = p
+        self._place_attached(worlds)
+
+    def detach(self, body: int, world: int | None = None) -> None:
+        """Let ``body`` go (``attach``): put at its place one last time, it leaves with its
+        parent's current velocity."""
+        i = self._body(body, "detach")
+        worlds = self._worlds(world, "detach")
+        self._place_attached(worlds)
+        self.attached.parent[worlds, i] = -1
+
+    def _place_attached(self, worlds) -> None:
+        pipeline.place_attached(self, None if isinstance(worlds, slice) else worlds)
 
     def view(self, world: int) -> WorldView:
         """One world of a batched World, seen as an unbatched one (``WorldView``)."""
@@ -408,6 +444,12 @@ class WorldView:
 
     def contacts(self, margin: float = 0.0) -> Contacts:
         return self.batch.contacts(margin, world=self.index)
+
+    def attach(self, body, parent) -> None:
+        self.batch.attach(body, parent, world=self.index)
+
+    def detach(self, body) -> None:
+        self.batch.detach(body, world=self.index)
 
 
 def _same_shape(a, b) -> bool:

@@ -163,3 +163,35 @@ def test_state_views_are_read_only():
     world = rg.World(mixed_scene())
     with pytest.raises(ValueError):
         world.position[1, 0] = 3.0
+
+
+def test_an_attached_body_rides_with_its_parent_and_leaves_with_its_velocity():
+    """World.attach keeps a body at its offset from a kinematic parent (pose to round-off,
+    the parent's velocity, no spin) through steps, gravity and contacts; detach lets it go
+    with the parent's velocity at that instant, after which it falls freely."""
+    scene = rg.Scene()
+    scene.add_ground()
+    pad = scene.add_body(rg.Box((0.02, 0.02, 0.01)), kinematic=True, position=(0, 0, 0.5),
+                         angular_velocity=(0, 0, 1.0))
+    cube = scene.add_body(rg.Box((0.02, 0.02, 0.02)), mass=0.1, position=(0.01, 0, 0.47))
+    for num_worlds in (None, 2):
+        world = rg.World(scene, dt=1 / 240, num_worlds=num_worlds)
+        view = world if num_worlds is None else world.view(1)
+        offset = view.position[cube] - view.position[pad]
+        view.set_velocity(pad, velocity=(0.3, 0.0, 0.1))
+        view.attach(cube, pad)
+        world.step(48)
+        r = view.rotation[pad]
+        np.testing.assert_allclose(view.position[cube], view.position[pad] + r @ offset,
+                                   atol=1e-12)
+        np.testing.assert_array_equal(view.velocity[cube], view.velocity[pad])
+        np.testing.assert_array_equal(view.angular_velocity[cube], 0.0)
+        view.set_velocity(pad, velocity=(0.0, 0.5, 0.0))
+        view.detach(cube)
+        np.testing.assert_array_equal(view.velocity[cube], [0.0, 0.5, 0.0])
+        world.step(24)  # 0.1 s of free fall
+        np.testing.assert_allclose(view.velocity[cube], [0.0, 0.5, -9.81 * 0.1], atol=1e-12)
+        if num_worlds is not None:  # the other world never had an attachment
+            assert world.position[0, cube, 2] < 0.47
+    with pytest.raises(ValueError, match="must be dynamic and parent"):
+        rg.World(scene).attach(pad, cube)

@@ -27,6 +27,7 @@ from rigid_gym.kernels.jit import kernel, prange
 from rigid_gym.kernels.quaternion import (
     apply_inverse_inertia,
     cross,
+    normalize_quaternion,
     rotate_by_angular_velocity,
     rotation_from_quaternion,
 )
@@ -175,3 +176,38 @@ def update_positions(
         update_world_positions(w, position, orientation, velocity, angular_momentum,
                                angular_velocity, rotation, torque, inverse_moments, motion, dt,
                                order)
+
+
+@kernel
+def place_attached(w, position, orientation, velocity, angular_momentum, angular_velocity,
+                   rotation, parent, offset_position, offset_orientation):
+    """Put every body of world w that is attached (parent (B, n) int32 >= 0) at its offset
+    from its parent (offset_position (B, n, 3) m in the parent's frame, offset_orientation
+    (B, n, 4) relative quaternion), moving with the parent's velocity and not turning."""
+    for i in range(position.shape[1]):
+        p = parent[w, i]
+        if p < 0:
+            continue
+        r = rotation[w, p]
+        d = offset_position[w, i]
+        for c in range(3):
+            position[w, i, c] = position[w, p, c] + r[c, 0] * d[0] + r[c, 1] * d[1] + r[c, 2] * d[2]
+            velocity[w, i, c] = velocity[w, p, c]
+            angular_velocity[w, i, c] = 0.0
+            angular_momentum[w, i, c] = 0.0
+        a, b, q = orientation[w, p], offset_orientation[w, i], orientation[w, i]
+        q[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3]
+        q[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2]
+        q[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1]
+        q[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]
+        normalize_quaternion(q)
+        rotation_from_quaternion(q, rotation[w, i])
+
+
+@kernel(parallel=True)
+def place_attached_bodies(position, orientation, velocity, angular_momentum, angular_velocity,
+                          rotation, parent, offset_position, offset_orientation):
+    """``place_attached`` for every world."""
+    for w in prange(position.shape[0]):
+        place_attached(w, position, orientation, velocity, angular_momentum, angular_velocity,
+                       rotation, parent, offset_position, offset_orientation)

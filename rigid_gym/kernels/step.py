@@ -11,7 +11,11 @@ bit-identical to the phase-by-phase pipeline and to stepping the worlds one by o
 from collections import namedtuple
 
 from rigid_gym.kernels.broadphase import find_world_pairs
-from rigid_gym.kernels.integrate import update_world_positions, update_world_velocities
+from rigid_gym.kernels.integrate import (
+    place_attached,
+    update_world_positions,
+    update_world_velocities,
+)
 from rigid_gym.kernels.jit import kernel, prange
 from rigid_gym.kernels.solver import (
     COLLISION,
@@ -27,6 +31,11 @@ pair_a, pair_b (B, P) int32; pair_count (B,) int32 (may exceed P: buffers too sm
 pair_impulse (B, P, 3) N s, each pair's impulse on its body a in the current step;
 keys, tmp (B, P) int64 sorting scratch."""
 
+Attachments = namedtuple("Attachments", "parent offset_position offset_orientation")
+"""Bodies held rigidly by another (``World.attach``), leading world axis B: parent (B, n)
+int32 (-1: free), offset_position (B, n, 3) m in the parent's frame, offset_orientation
+(B, n, 4) relative to the parent's."""
+
 Settings = namedtuple("Settings", "collision_passes contact_passes shock_sweeps rotation_order "
                                   "sweep broad_phase gravity up")
 """What ``SolverConfig`` decides, as the kernels take it: pass and sweep counts (0 = phase
@@ -35,19 +44,24 @@ and the unit vector against gravity (3,)."""
 
 
 @kernel
-def step_world(w, steps, dt, state, model, geo, pairs, scratch, wide, graph, settings):
+def step_world(w, steps, dt, state, model, geo, pairs, scratch, wide, graph, settings,
+               attached):
     """Advance world w by up to ``steps`` steps of dt (s); returns how many were done. Fewer
     than ``steps`` means the pair buffers were too small for the next step (nothing of that
     step was applied; pairs.pair_count[w] says how many pairs it needs).
 
     state, model: ``rigid_gym.world`` State and Model; geo: compiled geometry; pairs: Pairs;
     scratch, wide: batched ``solver.Scratch`` (one pair's contacts; one body's contacts with
-    all its supports); graph: batched ``solver.Graph``; settings: Settings. Forces and torques
-    act during the first step and are then cleared.
+    all its supports); graph: batched ``solver.Graph``; settings: Settings; attached:
+    Attachments, whose bodies are put at their place before every step and after the last.
+    Forces and torques act during the first step and are then cleared.
     """
-    s, m, c = state, model, settings
+    s, m, c, a = state, model, settings, attached
     capacity = pairs.pair_a.shape[1]
     for done in range(steps):
+        place_attached(w, s.position, s.orientation, s.velocity, s.angular_momentum,
+                       s.angular_velocity, s.rotation, a.parent, a.offset_position,
+                       a.offset_orientation)
         count = 0
         if c.broad_phase:
             count = find_world_pairs(s.position[w], s.rotation[w], s.velocity[w],
@@ -76,15 +90,19 @@ def step_world(w, steps, dt, state, model, geo, pairs, scratch, wide, graph, set
                                m.motion, dt, c.rotation_order)
         s.force[w] = 0.0
         s.torque[w] = 0.0
+    place_attached(w, s.position, s.orientation, s.velocity, s.angular_momentum,
+                   s.angular_velocity, s.rotation, a.parent, a.offset_position,
+                   a.offset_orientation)
     return steps
 
 
 @kernel(parallel=True)
-def step_worlds(steps, done, dt, state, model, geo, pairs, scratch, wide, graph, settings):
+def step_worlds(steps, done, dt, state, model, geo, pairs, scratch, wide, graph, settings,
+                attached):
     """``step_world`` for every world, in parallel: each world w advances from done[w] (B,)
     int64 steps to ``steps``, and done[w] is updated (short of ``steps`` when its pair buffers
     were too small)."""
     for w in prange(state.position.shape[0]):
         if done[w] < steps:
             done[w] += step_world(w, steps - done[w], dt, state, model, geo, pairs, scratch, wide,
-                                  graph, settings)
+                                  graph, settings, attached)
