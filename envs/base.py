@@ -154,11 +154,13 @@ class RigidGymEnv(gym.Env):
                                  friction=friction[-2], name="gripper")
         self._add_fixtures(scene)
         self.scene = scene
-        if self.batch is None:
-            self.world = World(scene, dt=STEP_TIME / SOLVER_STEPS)
-        else:  # a vector env's world: same bodies, new poses and materials
+        if self.batch is not None:  # a vector env's world: same bodies, new poses, materials
             self.batch.batch.load(scene, self.batch.index)
             self.world = self.batch
+        elif self.world is None or "size" in self.randomization:
+            self.world = World(scene, dt=STEP_TIME / SOLVER_STEPS)
+        else:  # same shapes as last episode: reuse the World (a new one costs ~4 ms)
+            self.world.load(scene, 0)
         self.cubes = cubes
         self.gripper = SuctionGripper(self.world, gripper, cubes, [(h, h, h) for h in half],
                                       STEP_TIME, Workspace())

@@ -99,6 +99,7 @@ class World:
         self.batched = num_worlds is not None
         self.num_worlds = int(num_worlds) if self.batched else 1
         self.config = SolverConfig.for_scene(scene) if config is None else config
+        self._config_from_scene = config is None
         self.model = _build_model(scene, self.num_worlds)
         self.geometry = compile_geometry(scene.bodies, self.config.box_edge_segments)
         self.collider = Collider(self.geometry, self.model.motion, self.num_worlds,
@@ -152,7 +153,8 @@ class World:
         """Put ``scene``'s bodies into ``world``: their poses, velocities, masses, friction
         and restitution (what a reset of one world with new parameters needs). The scene must
         have this world's structure: the same bodies, shapes and motion classes in the same
-        order (the geometry is shared by all worlds)."""
+        order (the geometry is shared by all worlds). A World of one world starts again at
+        time 0, as a new World of ``scene`` would, without compiling its geometry again."""
         w = self._worlds(world, "load")
         if not isinstance(scene, Scene) or len(scene) != len(self.scene):
             raise ValueError(f"World.load: scene must be a Scene of {len(self.scene)} bodies")
@@ -161,11 +163,17 @@ class World:
                 raise ValueError(f"World.load: body {mine.index} ({mine.name!r}) differs in shape "
                                  f"or motion from the world's scene; only poses, velocities and "
                                  "materials may change between worlds")
+        if self._config_from_scene and SolverConfig.for_scene(scene) != self.config:
+            raise ValueError("World.load: the scene needs another SolverConfig.for_scene than "
+                             f"this world's ({SolverConfig.for_scene(scene)} vs {self.config}); "
+                             "give the World an explicit config to load such scenes")
         for current, new in zip(self.model[1:5], _build_model(scene, 1)[1:5]):
             current[w] = new[0]
         for current, new in zip(self.state, _build_state(scene, 1)):
             current[w] = new[0]
         self.attached.parent[w] = -1
+        if self.num_worlds == 1:
+            self.steps = 0  # every world starts over
 
     def attach(self, body: int, parent: int, world: int | None = None) -> None:
         """Hold dynamic ``body`` rigidly at its current pose relative to kinematic ``parent``
