@@ -1,0 +1,315 @@
+"""Speed against the bar of the speed issue: solver steps/s, env steps/s, batched env steps/s.
+
+1. Solver (``--only solver``): steps/s at dt = 1/240, one world, for the scenes of
+   ``rigid_gym.report.scenes``: the 10-cube stack, the 55-box pyramid and piles of 10, 100 and
+   1000 mixed bodies. Every engine (ours, and MuJoCo and PyBullet through
+   ``rigid_gym.report.peers`` when the ``compare`` extra is installed: ``pip install -e
+   ".[compare]"``) builds the scene, runs ``settle`` steps, then times its own ``step(steps)``
+   ``--repeats`` times; the figure is the median. Every engine gets the same step counts, so
+   all are timed over the same stretch of simulated time. Then the stack runs 10 s more and
+   the table gives how far its top cube moved (bar: < 1 mm for ours); for the piles, the
+   microseconds per step and per body-step and the exponent k of cost ~ N^k between the two
+   largest piles (100 and 1000). A peer that cannot build a scene says why in the table.
+2. Envs (``--only envs``): env steps/s through ``gym.make`` for Push, Stack and Throw, one
+   env, seeded random actions, resets included (the helper of ``benchmarks/envs.py``), and
+   panda-gym's PandaPush-v3 timed the same way in the same run when installed, with our rate
+   as a ratio to it.
+3. Batched (``--only batched``): env steps/s (B x vector steps per second) through
+   ``gym.make_vec(env_id, num_envs=B, vectorization_mode="vector_entry_point")`` at B = 1,
+   16, 256 and 1024, actions from a seeded generator of shape (B, action size), resets left to
+   the vector env; "not available" where a task registers no vector entry point.
+
+The header line names the machine and the versions. One world runs on the calling thread
+only; the numba thread count matters for batched worlds.
+
+    python benchmarks/speed.py                   # all three sections, about 4 minutes on 2 cores
+                                                 # (half of it MuJoCo's 1000-body pile)
+    python benchmarks/speed.py --only solver     # one section: solver, envs or batched
+    python benchmarks/speed.py --quick           # smoke run with small counts, about 15 s
+    python benchmarks/speed.py --repeats 9       # more timings per median (default 5)
+
+Times exclude numba compiling (the first run of a process after a kernel change: 1-3 min).
+"""
+
+import argparse
+import importlib.metadata
+import importlib.util
+import os
+import platform
+import statistics
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numba
+import numpy as np
+
+import rigid_gym as rg
+from rigid_gym.kernels.integrate import DYNAMIC
+from rigid_gym.report import peers
+from rigid_gym.report.scenes import cube_stack, pile, pyramid
+
+DT = 1 / 240
+STACK_SECONDS = 10.0
+"""Simulated time over which the stack's top cube is watched, s."""
+STACK_BAR_MM = 1.0
+PEERS = {"MuJoCo": ("mujoco", peers.MuJoCoWorld), "PyBullet": ("pybullet", peers.PyBulletWorld)}
+"""Peer label -> (module name as in ``peers.available``, world class (scene, dt))."""
+ENGINES = ("ours", *PEERS)
+BATCH_SIZES = (1, 16, 256, 1024)
+QUICK_BATCH_SIZES = (1, 16)
+BATCH_WARMUP = 5
+"""Untimed vector steps before the timings (numba compiles the batched kernels here)."""
+
+
+def load_env_benchmark():
+    """``benchmarks/envs.py`` as a module, loaded by path (``import envs`` could find the
+    repository's ``envs/`` package, which is rigid_gym.envs)."""
+    spec = importlib.util.spec_from_file_location("benchmark_envs",
+                                                  Path(__file__).with_name("envs.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+ENV_BENCHMARK = load_env_benchmark()
+
+
+# -- header ----------------------------------------------------------------------------------
+
+def cpu_model() -> str:
+    cpuinfo = Path("/proc/cpuinfo")
+    if cpuinfo.exists():
+        for line in cpuinfo.read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    return platform.processor() or "unknown CPU"
+
+
+def version(package: str) -> str:
+    try:
+        return importlib.metadata.version(package)
+    except importlib.metadata.PackageNotFoundError:
+        return "not installed"
+
+
+def machine_line() -> str:
+    return (f"Machine: {cpu_model()}, {os.cpu_count()} cores, {numba.get_num_threads()} numba "
+            f"threads; Python {platform.python_version()}, numba {numba.__version__}, numpy "
+            f"{np.__version__}, gymnasium {gym.__version__}; mujoco {version('mujoco')}, "
+            f"pybullet {version('pybullet')}, panda-gym {version('panda-gym')}")
+
+
+# -- solver ----------------------------------------------------------------------------------
+
+def solver_scenes(quick: bool) -> list[tuple[str, rg.Scene, int, int]]:
+    """(name, scene, settle steps, timed steps per repeat) for each scene. The piles settle
+    equally long, so their growth with N compares piles in the same state."""
+    if quick:
+        return [("10-cube stack", cube_stack(10), 240, 60), ("pile of 10", pile(10), 120, 60),
+                ("pile of 100", pile(100), 120, 8)]
+    return [("10-cube stack", cube_stack(10), 240, 240), ("55-box pyramid", pyramid(10), 240, 120),
+            ("pile of 10", pile(10), 240, 240), ("pile of 100", pile(100), 240, 48),
+            ("pile of 1000", pile(1000), 240, 4)]
+
+
+def dynamic_bodies(scene: rg.Scene) -> int:
+    return sum(body.motion == DYNAMIC for body in scene.bodies)
+
+
+def build(engine: str, scene: rg.Scene):
+    """A world of ``engine`` (one of ENGINES) for ``scene``, or why a peer has none (str)."""
+    if engine == "ours":
+        return rg.World(scene, dt=DT)
+    module, world_class = PEERS[engine]
+    if not peers.available()[module]:
+        return 'not installed (pip install -e ".[compare]")'
+    try:
+        return world_class(scene, DT)
+    except Exception as exc:  # what a peer cannot build is a table cell, not a crash
+        return f"cannot build: {exc}".replace("|", "/")
+
+
+def median_rate(world, steps: int, repeats: int) -> float:
+    """Median steps/s of ``repeats`` timings of ``world.step(steps)``."""
+    rates = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        world.step(steps)
+        rates.append(steps / (time.perf_counter() - start))
+    return statistics.median(rates)
+
+
+def moved_mm(world, body: int, seconds: float) -> float:
+    """How far the centre of ``body`` moves while ``world`` runs ``seconds`` s, mm."""
+    start = np.array(world.position[body])
+    world.step(round(seconds / DT))
+    return 1e3 * float(np.linalg.norm(world.position[body] - start))
+
+
+def measure(engine: str, scene: rg.Scene, settle: int, steps: int, repeats: int,
+            watch: int | None = None):
+    """(steps/s, mm moved by body ``watch`` over STACK_SECONDS after the timings, or None),
+    or why the engine cannot run the scene (str)."""
+    world = build(engine, scene)
+    if isinstance(world, str):
+        return world
+    world.step(settle)
+    rate = median_rate(world, steps, repeats)
+    moved = None if watch is None else moved_mm(world, watch, STACK_SECONDS)
+    if engine != "ours":
+        world.close()
+    return rate, moved
+
+
+def rate_text(rate: float) -> str:
+    """Steps/s to the unit from 100 up, to 3 significant digits below."""
+    return f"{rate:,.0f}" if rate >= 100 else f"{rate:.3g}"
+
+
+def rate_cells(ours, peer) -> str:
+    """The peer's steps/s and ours / theirs, or why the peer has no rate."""
+    if isinstance(peer, str):
+        return f"{peer} | —"
+    return f"{rate_text(peer[0])} | {ours[0] / peer[0]:.2f}x"
+
+
+def print_solver_table(results: dict, scenes) -> None:
+    print("| scene | bodies | ours | " + " | ".join(f"{p} | ours/{p}" for p in PEERS) + " |")
+    print("|---|---|---|" + "---|---|" * len(PEERS))
+    for name, scene, _, _ in scenes:
+        row = results[name]
+        print(f"| {name} | {dynamic_bodies(scene)} | {rate_text(row['ours'][0])} | "
+              + " | ".join(rate_cells(row["ours"], row[p]) for p in PEERS) + " |")
+
+
+def print_stack_health(row: dict) -> None:
+    print(f"\n10-cube stack: top cube moved in {STACK_SECONDS:.0f} s from the settled state "
+          f"(bar: < {STACK_BAR_MM:g} mm for ours)\n")
+    print("| engine | moved (mm) |")
+    print("|---|---|")
+    for engine in ENGINES:
+        cell = row[engine] if isinstance(row[engine], str) else f"{row[engine][1]:.3g}"
+        print(f"| {engine} | {cell} |")
+    verdict = "met" if row["ours"][1] < STACK_BAR_MM else "NOT met"
+    print(f"\nbar {verdict}: ours moved {row['ours'][1]:.3g} mm")
+
+
+def growth_exponent(counts, microseconds) -> float:
+    """k of cost ~ N^k between the last two (N, cost) points."""
+    return float(np.log(microseconds[-1] / microseconds[-2]) / np.log(counts[-1] / counts[-2]))
+
+
+def print_pile_growth(results: dict, scenes) -> None:
+    piles = [(name, dynamic_bodies(scene)) for name, scene, _, _ in scenes
+             if name.startswith("pile")]
+    counts = np.array([n for _, n in piles], dtype=float)
+    print(f"\nPiles: cost per step and per body-step (us), and k of cost ~ N^k between "
+          f"N = {counts[-2]:.0f} and {counts[-1]:.0f}\n")
+    print("| engine | " + " | ".join(f"us/step N={n:.0f}" for n in counts) + " | "
+          + " | ".join(f"us/body-step N={n:.0f}" for n in counts) + " | k |")
+    print("|---|" + "---|" * (2 * len(counts) + 1))
+    for engine in ENGINES:
+        runs = [results[name][engine] for name, _ in piles]
+        if any(isinstance(run, str) for run in runs):
+            print(f"| {engine} | " + " | ".join(["—"] * (2 * len(counts))) + " | — |")
+            continue
+        per_step = np.array([1e6 / rate for rate, _ in runs])
+        print(f"| {engine} | " + " | ".join(f"{t:,.1f}" for t in per_step) + " | "
+              + " | ".join(f"{t:.2f}" for t in per_step / counts)
+              + f" | {growth_exponent(counts, per_step):.2f} |")
+
+
+def solver_section(quick: bool, repeats: int) -> None:
+    scenes = solver_scenes(quick)
+    print(f"\nSolver steps/s, dt = 1/240, one world (median of {repeats} timings after "
+          "settling; ratios are ours / theirs)\n")
+    results = {}
+    for name, scene, settle, steps in scenes:
+        watch = len(scene.bodies) - 1 if name.endswith("stack") else None  # the top cube
+        results[name] = {engine: measure(engine, scene, settle, steps, repeats, watch)
+                         for engine in ENGINES}
+    print_solver_table(results, scenes)
+    print_stack_health(results["10-cube stack"])
+    print_pile_growth(results, scenes)
+
+
+# -- envs ------------------------------------------------------------------------------------
+
+def envs_section(quick: bool, repeats: int) -> None:
+    steps = 200 if quick else 1000
+    panda_id = ENV_BENCHMARK.PANDA_PUSH
+    print(f"\nEnv steps/s, gym.make, one env, random actions, resets included (median of "
+          f"{repeats} x {steps} steps)\n")
+    panda = ENV_BENCHMARK.steps_per_second(panda_id, steps, repeats) \
+        if ENV_BENCHMARK.panda_available() else None
+    print(f"| env | steps/s | ours/{panda_id} |")
+    print("|---|---|---|")
+    for env_id in ENV_BENCHMARK.TASKS:
+        rate = ENV_BENCHMARK.steps_per_second(env_id, steps, repeats)
+        ratio = f"{rate / panda:.2f}x" if panda else "panda-gym not installed"
+        print(f"| {env_id} | {rate:,.0f} | {ratio} |", flush=True)
+    if panda:
+        print(f"| {panda_id} (panda-gym, PyBullet) | {panda:,.0f} | 1.00x |")
+
+
+# -- batched envs ----------------------------------------------------------------------------
+
+def has_vector_env(env_id: str) -> bool:
+    return getattr(gym.spec(env_id), "vector_entry_point", None) is not None
+
+
+def batched_rate(env_id: str, batch: int, steps: int, repeats: int) -> float:
+    """Median env steps/s (batch x vector steps per second) of ``gym.make_vec`` with ``batch``
+    envs over ``repeats`` timings of at least ``steps`` env steps (10 vector steps or more)."""
+    envs = gym.make_vec(env_id, num_envs=batch, vectorization_mode="vector_entry_point")
+    space = envs.single_action_space
+    rng = np.random.default_rng(0)
+    envs.reset(seed=0)
+
+    def run(count):
+        for _ in range(count):
+            envs.step(rng.uniform(space.low, space.high, (batch, *space.shape))
+                      .astype(space.dtype))
+
+    run(BATCH_WARMUP)
+    vector_steps = max(10, steps // batch)
+    rates = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        run(vector_steps)
+        rates.append(batch * vector_steps / (time.perf_counter() - start))
+    envs.close()
+    return statistics.median(rates)
+
+
+def batched_section(quick: bool, repeats: int) -> None:
+    steps = 200 if quick else 1000
+    sizes = QUICK_BATCH_SIZES if quick else BATCH_SIZES
+    print(f"\nBatched env steps/s, gym.make_vec(vectorization_mode=\"vector_entry_point\"), "
+          f"B x vector steps per second (median of {repeats} timings)\n")
+    print("| env | " + " | ".join(f"B = {b}" for b in sizes) + " |")
+    print("|---|" + "---|" * len(sizes))
+    for env_id in ENV_BENCHMARK.TASKS:
+        if not has_vector_env(env_id):
+            cells = ["not available (no vector_entry_point)"] * len(sizes)
+        else:
+            cells = [f"{batched_rate(env_id, b, steps, repeats):,.0f}" for b in sizes]
+        print(f"| {env_id} | " + " | ".join(cells) + " |", flush=True)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", choices=["solver", "envs", "batched"])
+    parser.add_argument("--quick", action="store_true", help="small counts: a smoke run")
+    parser.add_argument("--repeats", type=int, default=5, help="timings per median")
+    args = parser.parse_args()
+    print(machine_line(), flush=True)
+    sections = {"solver": solver_section, "envs": envs_section, "batched": batched_section}
+    for name, section in sections.items():
+        if args.only in (None, name):
+            section(args.quick, args.repeats)
+
+
+if __name__ == "__main__":
+    main()
