@@ -36,7 +36,7 @@ import rigid_gym  # noqa: F401  (registers the env ids)
 from rigid_gym.agents.evaluate import success_rate
 
 HYPERPARAMS = Path(__file__).with_name("hyperparams.yml")
-ALGORITHMS = ("sac", "tqc", "ppo")
+ALGORITHMS = ("sac", "tqc", "ppo", "bc_sac")
 DEMO_SEED = 2_000_000
 """Demonstration episodes use seeds DEMO_SEED + 1000 * seed + rank, apart from the training seeds
 (small) and the evaluation seeds (``EVAL_SEED`` = 1,000,000 onwards)."""
@@ -52,7 +52,11 @@ def load_hyperparams(env_id: str) -> dict:
 
 
 def algorithm_class(name: str):
-    """The SB3 class for ``name`` (sac, tqc or ppo)."""
+    """The SB3 class for ``name`` (sac, tqc, ppo, or bc_sac: SAC with a behaviour-cloning loss
+    on the demonstrations, ``rigid_gym.agents.bc_sac``)."""
+    if name == "bc_sac":
+        from rigid_gym.agents.bc_sac import BCSAC
+        return BCSAC
     if name == "sac":
         from stable_baselines3 import SAC
         return SAC
@@ -153,7 +157,9 @@ def add_demonstrations(model, env_id: str, episodes: int, seed: int) -> dict:
     Demonstrations in the replay buffer (Vecerik et al. 2017, Nair et al. 2018) show a sparse
     reward off-policy learner what success looks like on tasks that random exploration almost
     never solves (Stack); the learner still has to work out the values and the policy itself.
-    Their env steps count towards a run's total in the results table.
+    Their env steps count towards a run's total in the results table. A model with a
+    ``make_demo_buffer`` method (bc_sac) also gets them in a buffer of their own, for its
+    behaviour-cloning loss.
     """
     from rigid_gym.envs.scripted import scripted_policy
 
@@ -161,6 +167,10 @@ def add_demonstrations(model, env_id: str, episodes: int, seed: int) -> dict:
     env = make_vec_env(env_id, n_envs=n_envs, seed=DEMO_SEED + 1000 * seed)
     policies = [scripted_policy(e) for e in env.envs]
     obs = env.reset()
+    buffers = [model.replay_buffer]
+    if hasattr(model, "make_demo_buffer"):
+        length = gym.spec(env_id).max_episode_steps
+        buffers.append(model.make_demo_buffer((episodes + n_envs) * length))
     finished, successes, steps = 0, 0.0, 0
     while finished < episodes:
         actions = np.stack([policy({key: value[i] for key, value in obs.items()})
@@ -171,8 +181,8 @@ def add_demonstrations(model, env_id: str, episodes: int, seed: int) -> dict:
             for key in stored:
                 stored[key][i] = infos[i]["terminal_observation"][key]
             successes += infos[i]["is_success"]
-        model.replay_buffer.add(obs, stored, model.policy.scale_action(actions), rewards, dones,
-                                infos)
+        for buffer in buffers:
+            buffer.add(obs, stored, model.policy.scale_action(actions), rewards, dones, infos)
         obs, finished, steps = next_obs, finished + int(dones.sum()), steps + n_envs
     env.close()
     return {"episodes": finished, "env_steps": steps, "success_rate": successes / finished}

@@ -113,3 +113,37 @@ def test_the_table_names_the_method_and_counts_demonstration_steps():
     assert minutes(runs[:2], "cpu_seconds") == "15 min"
     assert minutes(runs, "cpu_seconds") == "15 min (2 of 3 runs)"
     assert minutes(runs[2:], "cpu_seconds") == "—"
+
+
+def test_bc_sac_keeps_the_demonstrations_apart_and_clones_them():
+    from stable_baselines3 import HerReplayBuffer
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.logger import Logger
+
+    from rigid_gym.agents.bc_sac import BCSAC
+    from rigid_gym.agents.train import algorithm_class
+
+    assert algorithm_class("bc_sac") is BCSAC
+    env_id = "rigid_gym/Stack-v0"
+    model = BCSAC("MultiInputPolicy", make_vec_env(env_id, n_envs=1), buffer_size=1000,
+                  replay_buffer_class=HerReplayBuffer, policy_kwargs={"net_arch": [32, 32]},
+                  bc_weight=100.0, bc_batch_size=64, q_filter=False, learning_rate=3e-3, seed=0)
+    add_demonstrations(model, env_id, episodes=1, seed=0)
+    demo, replay = model.demo_buffer, model.replay_buffer
+    assert demo.pos == replay.pos == 100
+    assert (demo.actions[:100] == replay.actions[:100]).all()
+    model.set_logger(Logger(None, []))
+
+    def error():
+        obs = {key: value[:100, 0] for key, value in demo.observations.items()}
+        actions, _ = model.predict(obs, deterministic=True)
+        return float(np.mean((actions - demo.actions[:100, 0]) ** 2))
+
+    before = error()
+    model.train(gradient_steps=200, batch_size=32)
+    assert error() < 0.5 * before  # the BC term dominates: the actor imitates the demos
+    assert "train/bc_loss" in model.logger.name_to_value
+    # the Q-filter keeps only samples the critic rates above the policy's action
+    model.q_filter = True
+    loss, kept = model._bc_loss()
+    assert 0.0 <= kept <= 1.0 and loss.item() >= 0.0
