@@ -154,13 +154,12 @@ class RigidGymEnv(gym.Env):
                                  friction=friction[-2], name="gripper")
         self._add_fixtures(scene)
         self.scene = scene
-        if self.batch is not None:  # a vector env's world: same bodies, new poses, materials
-            self.batch.batch.load(scene, self.batch.index)
-            self.world = self.batch
-        elif self.world is None or "size" in self.randomization:
+        if self.batch is not None:
+            self.world = self.batch  # this env's world in a vector env's batch
+        if self.world is None or "size" in self.randomization:
             self.world = World(scene, dt=STEP_TIME / SOLVER_STEPS)
-        else:  # same shapes as last episode: reuse the World (a new one costs ~4 ms)
-            self.world.load(scene, 0)
+        else:  # same shapes as before: new poses and materials (a new World costs ~4 ms)
+            self.world.load(scene)
         self.cubes = cubes
         self.gripper = SuctionGripper(self.world, gripper, cubes, [(h, h, h) for h in half],
                                       STEP_TIME, Workspace())

@@ -149,12 +149,12 @@ class World:
         if world is None:
             self.steps = 0
 
-    def load(self, scene: Scene, world: int) -> None:
-        """Put ``scene``'s bodies into ``world``: their poses, velocities, masses, friction
-        and restitution (what a reset of one world with new parameters needs). The scene must
-        have this world's structure: the same bodies, shapes and motion classes in the same
-        order (the geometry is shared by all worlds). A World of one world starts again at
-        time 0, as a new World of ``scene`` would, without compiling its geometry again."""
+    def load(self, scene: Scene, world: int | None = None) -> None:
+        """Put ``scene``'s bodies into ``world`` (None: every world): their poses, velocities,
+        masses, friction and restitution (what a reset with new parameters needs). The scene
+        must have this world's structure: the same bodies, shapes and motion classes in the
+        same order (the geometry is shared by all worlds). Once every world is loaded, time
+        starts again at 0, as in a new World of ``scene``, without compiling its geometry."""
         w = self._worlds(world, "load")
         if not isinstance(scene, Scene) or len(scene) != len(self.scene):
             raise ValueError(f"World.load: scene must be a Scene of {len(self.scene)} bodies")
@@ -172,7 +172,7 @@ class World:
         for current, new in zip(self.state, _build_state(scene, 1)):
             current[w] = new[0]
         self.attached.parent[w] = -1
-        if self.num_worlds == 1:
+        if world is None or self.num_worlds == 1:
             self.steps = 0  # every world starts over
 
     def attach(self, body: int, parent: int, world: int | None = None) -> None:
@@ -452,6 +452,9 @@ class WorldView:
 
     def contacts(self, margin: float = 0.0) -> Contacts:
         return self.batch.contacts(margin, world=self.index)
+
+    def load(self, scene: Scene) -> None:
+        self.batch.load(scene, world=self.index)
 
     def attach(self, body, parent) -> None:
         self.batch.attach(body, parent, world=self.index)

@@ -24,8 +24,7 @@ import numba
 JIT_FLAGS = dict(cache=True, fastmath=False, nogil=True, error_model="numpy")
 
 
-def kernel(fn=None, *, parallel: bool = False, allocates: bool = False, views: bool = False,
-           inline: bool = False):
+def kernel(fn=None, *, parallel: bool = False, allocates: bool = False, inline: bool = False):
     """Compile ``fn`` with the project's flags.
 
     Kernels do not reference-count arrays (numba's ``_nrt=False``): numba otherwise increments
@@ -33,18 +32,17 @@ def kernel(fn=None, *, parallel: bool = False, allocates: bool = False, views: b
     members included, at every call that is not inlined; with the geometry's 21 arrays, that
     made a plane's distance cost 300 ns instead of 20 (measured). Such kernels cannot allocate:
     ``allocates=True`` keeps reference counting for those that do (outside the step).
-    ``views=True`` for a kernel that returns views of its arguments: it is inlined into its
-    caller, so the views are counted exactly when the caller counts (a view returned
-    uncounted to a counting caller would be released twice: heap corruption, seen).
-    ``inline=True`` for a small hot helper that takes namedtuples of arrays: inlined (numba
-    IR) into its callers, since a call passes every member's fields as separate arguments
-    (the geometry alone is ~180): a box's 8 corners against a plane took 981 ns, 446 inlined.
-    ``parallel=True`` enables
+    ``inline=True`` inlines the kernel into its callers (numba IR). For a small hot helper that
+    takes namedtuples of arrays, since a call passes every member's fields as separate
+    arguments (the geometry alone is ~180): a box's 8 corners against a plane took 981 ns,
+    446 inlined. And required for a kernel that returns views of its arguments: inlined, the
+    views are counted exactly when the caller counts (a view returned uncounted to a counting
+    caller would be released twice: heap corruption, seen). ``parallel=True`` enables
     ``numba.prange`` (with counting, as numba's parallel loops need) and adds the serial twin
     ``.serial``."""
 
     def wrap(f):
-        if views or inline:
+        if inline:
             return numba.njit(**JIT_FLAGS, inline="always")(f)
         if not parallel:
             return numba.njit(**JIT_FLAGS, _nrt=allocates)(f)

@@ -92,7 +92,7 @@ SCRATCH_SHAPES = (("position", ("n", 3), np.float64), ("quaternion", ("n", 4), n
 """Per-world shape of each Scratch field ("n": bodies, "c": contact capacity) and dtype."""
 
 
-@kernel(views=True)
+@kernel(inline=True)  # returns views: must be inlined (kernels/jit.py)
 def world_scratch(s, w):
     """The rows of world w of a batched Scratch."""
     return Scratch(s.position[w], s.quaternion[w], s.rotation[w], s.point[w], s.normal[w],
@@ -431,7 +431,7 @@ GRAPH_SHAPES = (("touching", ("p",), np.bool_), ("edge_from", ("2p",), np.int64)
 """Per-world shape of each Graph field ("n": bodies, "p": pair capacity) and dtype."""
 
 
-@kernel(views=True)
+@kernel(inline=True)  # returns views: must be inlined (kernels/jit.py)
 def world_graph(g, w):
     """The rows of world w of a batched Graph."""
     return Graph(g.touching[w], g.edge_from[w], g.edge_to[w], g.edge_start[w], g.targets[w],
