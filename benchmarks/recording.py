@@ -13,7 +13,7 @@ time, the share it would have under the default trigger (``cubic_schedule``: 10 
 noisier than the recorder's own time.
 
     python benchmarks/recording.py                  # about a minute on 2 cores
-    python benchmarks/recording.py --repeats 9 --episodes 4
+    python benchmarks/recording.py --repeats 9 --episodes 8
 """
 
 import argparse
@@ -67,7 +67,8 @@ def make(env_id: str, folder: Path | None, contacts: bool = False):
 
 
 def run_episodes(env, seeds) -> tuple[int, float]:
-    """(steps, wall seconds) of the scripted policy's episodes, one per seed, files closed."""
+    """(steps, wall seconds) of the scripted policy's episodes, one per seed (a recorder
+    completes each episode's file when it ends)."""
     policy = scripted_policy(env)
     steps = 0
     start = time.perf_counter()
@@ -77,29 +78,36 @@ def run_episodes(env, seeds) -> tuple[int, float]:
         while not done:
             observation, _, terminated, truncated, _ = env.step(policy(observation))
             steps, done = steps + 1, terminated or truncated
-    env.close()
     return steps, time.perf_counter() - start
 
 
 def measure(env_id: str, repeats: int, episodes: int, folder: Path) -> dict:
-    """Median steps/s bare and recorded, the recorder's median ms per episode, file sizes."""
+    """Median steps/s bare and recorded, the recorder's median ms per episode, file sizes.
+    Each kind keeps one env for all its rounds, as training does (the recorder builds what
+    its files share at its first episode)."""
     bare_rates, recorded_rates, recorder_ms = [], [], []
     seeds = range(episodes)
-    run_episodes(make(env_id, None)[0], [0])  # warm-up: numba caches, first allocations
+    envs = {"bare": make(env_id, None), "recorded": make(env_id, folder)}
+    for env, _ in envs.values():
+        run_episodes(env, [0])  # warm-up: numba caches, first allocations, shared layout
     for repeat in range(repeats):
         order = ("bare", "recorded") if repeat % 2 == 0 else ("recorded", "bare")
         for kind in order:
-            env, inner = make(env_id, folder if kind == "recorded" else None)
+            env, inner = envs[kind]
+            env.seconds = inner.seconds = 0.0
             steps, seconds = run_episodes(env, seeds)
             if kind == "bare":
                 bare_rates.append(steps / seconds)
             else:
                 recorded_rates.append(steps / seconds)
                 recorder_ms.append(1e3 * (env.seconds - inner.seconds) / episodes)
+    for env, _ in envs.values():
+        env.close()
     sizes = {}
     for contacts in (False, True):
         env, _ = make(env_id, folder / f"contacts-{contacts}", contacts)
         run_episodes(env, [0])
+        env.close()
         sizes[contacts] = env.env.paths[0].stat().st_size / 1024
     bare, recorded = statistics.median(bare_rates), statistics.median(recorded_rates)
     return {"bare": bare, "recorded": recorded, "overhead": bare / recorded - 1.0,
@@ -111,8 +119,8 @@ def measure(env_id: str, repeats: int, episodes: int, folder: Path) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--repeats", type=int, default=5, help="rounds per task (default 5)")
-    parser.add_argument("--episodes", type=int, default=2,
-                        help="episodes per round and kind (default 2)")
+    parser.add_argument("--episodes", type=int, default=4,
+                        help="episodes per round and kind (default 4)")
     args = parser.parse_args()
     if args.repeats < 1 or args.episodes < 1:
         parser.error(f"--repeats and --episodes must be >= 1, got {args.repeats}, "

@@ -32,9 +32,12 @@ Timelines: ``step`` (sequence: env steps, 0 = the state after ``reset``; for a W
 every step from 0; rewards, actions and successes at steps 1, 2, ... (the step they led to).
 Rerun stores translations and quaternions as float32 and scalars as float64.
 
-**Cost.** Static geometry is logged once per file; per step only numpy copies are buffered,
-and buffers are sent with ``send_columns`` at the end of an episode (or every
-``chunk_steps`` steps, bounding memory), which costs a few ms per episode.
+**Cost.** Static geometry is logged once per file, from archetypes built once per scene, and
+the blueprint from ``.rbl`` bytes built once per layout (building both for every file took
+longer than the episode's data). Per step only numpy copies are buffered, and buffers are
+sent with ``send_columns`` at the end of an episode (or every ``chunk_steps`` steps, bounding
+memory). A 50-step Push file costs ~7 ms: half opening it (stream, file sink, blueprint,
+scene), half sending the columns and closing (``benchmarks/recording.py``).
 
 **Files are complete** when an episode ends (terminated or truncated), at ``close()``, when
 ``step`` or ``reset`` raises (what was buffered is written, then the exception propagates), and
@@ -47,8 +50,10 @@ environment turns recording off: nothing is written and nothing fails.
 from __future__ import annotations
 
 import atexit
+import functools
 import os
 import re
+import tempfile
 import time
 from pathlib import Path
 
@@ -116,8 +121,7 @@ class RecordRerun(gym.Wrapper):
         self.options = _Options(contacts, force_scale, chunk_steps, "RecordRerun")
         self.paths: list[Path] = []
         self.episode_id = -1
-        eye, target, _ = env.unwrapped.camera_view
-        self._blueprint = _blueprint(eye, target, scalars=True, grid=False)
+        self._layout: _Layout | None = None  # built at the first recorded episode
         self._recording: _Recording | None = None
         self._step = 0
 
@@ -150,8 +154,7 @@ class RecordRerun(gym.Wrapper):
         task = self.env.unwrapped
         name = f"{self.run}-episode-{self.episode_id}"
         path = self.folder / f"{name}.rrd"
-        recording = _open(path, self.folder.name, name, task.world, 0, self.options,
-                          self._blueprint)
+        recording = _open(path, name, task.world, 0, self.options, self._scene_layout)
         if recording is None:
             return
         self._recording, self._step = recording, 0
@@ -165,6 +168,15 @@ class RecordRerun(gym.Wrapper):
         except BaseException:
             self._end_episode()
             raise
+
+    def _scene_layout(self) -> _Layout:
+        """The layout of the env's scene, built again only when the World is a new one."""
+        task = self.env.unwrapped
+        if self._layout is None or self._layout.scene is not task.world.scene:
+            eye, target, _ = task.camera_view
+            blueprint = _blueprint_file(self.folder.name, tuple(eye), tuple(target), True, False)
+            self._layout = _Layout(task.world.scene, self.folder.name, blueprint)
+        return self._layout
 
     def _record_step(self, action, reward, info) -> None:
         self._recording.record_state(self._step)
@@ -223,14 +235,16 @@ class WorldRecorder:
         if self._state == "closed":
             raise ValueError(f"WorldRecorder.record: {self.path} is closed; make a new recorder")
         if self._state == "new":
-            self._recording = _open(self.path, self.application_id, self.path.stem, self.world,
-                                    self.world_index, self.options,
-                                    _blueprint(None, None, scalars=False,
-                                               grid=not any(isinstance(b.shape, Plane)
-                                                            for b in self.world.scene.bodies)))
+            self._recording = _open(self.path, self.path.stem, self.world, self.world_index,
+                                    self.options, self._layout)
             self._state = "off" if self._recording is None else "open"
         if self._recording is not None:
             self._recording.record_state(self.world.steps)
+
+    def _layout(self) -> _Layout:
+        grid = not any(isinstance(b.shape, Plane) for b in self.world.scene.bodies)
+        return _Layout(self.world.scene, self.application_id,
+                       _blueprint_file(self.application_id, None, None, False, grid))
 
     def close(self) -> None:
         """Write what is buffered and complete the file (idempotent)."""
@@ -268,17 +282,46 @@ class _Options:
         self.chunk_steps = int(chunk_steps)
 
 
-def _open(path: Path, application_id: str, recording_id: str, world, index: int,
-          options: _Options, blueprint: rrb.Blueprint) -> _Recording | None:
+class _Layout:
+    """What every file of one scene shares, built once (for each file, building them took
+    longer than writing an episode's data): every body's geometry as rerun archetypes in its
+    body frame, and the blueprint, the bytes of an ``.rbl`` file for ``application_id``
+    (``_blueprint_file``). ``scene``: the World's scene (``World.load`` keeps it: only poses
+    and materials change)."""
+
+    def __init__(self, scene: Scene, application_id: str, blueprint: bytes):
+        self.scene = scene
+        self.application_id = application_id
+        self.blueprint = blueprint
+        self.entities = [f"world/bodies/{rr.escape_entity_path_part(b.name)}"
+                         for b in scene.bodies]
+        colors = np.round(255 * _body_colors(scene, None)).astype(np.uint8)
+        self.geometry = [_geometry(body.shape, body.body_from_shape,
+                                   np.append(colors[body.index], 255)) for body in scene.bodies]
+        self._markers: dict[int, tuple] = {}
+
+    def marker_geometry(self, k: int, shape, rgba: np.ndarray) -> list:
+        """Marker k's archetypes in its own frame, built again only when its shape (object)
+        or colour differs from the last file's (Push's disc is a 48-gon mesh: ~1 ms)."""
+        last = self._markers.get(k)
+        if last is None or last[0] is not shape or not np.array_equal(last[1], rgba):
+            last = self._markers[k] = (shape, rgba, _geometry(shape, Pose(), rgba))
+        return last[2]
+
+
+def _open(path: Path, recording_id: str, world, index: int, options: _Options,
+          layout) -> _Recording | None:
     """A new recording of world ``index`` of ``world`` to ``path``, or None when rerun is off
     (``RERUN=off``, ``0`` or ``false``, which rerun documents; checked first so that no
-    disabled stream is made: rerun warns about each when it is dropped)."""
+    disabled stream is made: rerun warns about each when it is dropped). ``layout``: a
+    function that gives the scene's ``_Layout``, called only when rerun is on."""
     if os.environ.get("RERUN", "").strip().lower() in ("0", "off", "false"):
         return None
-    stream = rr.RecordingStream(application_id, recording_id=recording_id)
+    layout = layout()
+    stream = rr.RecordingStream(layout.application_id, recording_id=recording_id)
     if not rr.is_enabled(stream):  # turned off some other way
         return None
-    return _Recording(stream, path, world, index, options, blueprint)
+    return _Recording(stream, path, world, index, options, layout)
 
 
 class _Recording:
@@ -287,25 +330,29 @@ class _Recording:
     """
 
     def __init__(self, stream: rr.RecordingStream, path: Path, world, index: int,
-                 options: _Options, blueprint: rrb.Blueprint):
+                 options: _Options, layout: _Layout):
         self.world, self.index, self.options = world, index, options
-        bodies = world.scene.bodies
-        self.entities = [f"world/bodies/{rr.escape_entity_path_part(b.name)}" for b in bodies]
-        self.moving = [b.index for b in bodies if b.motion != STATIC]
+        self.entities, self.layout = layout.entities, layout
+        self.moving = [b.index for b in world.scene.bodies if b.motion != STATIC]
         self.states = _Rows()
         self.scalars = _Rows()
         self.contacts = _Rows()
         path.parent.mkdir(parents=True, exist_ok=True)
         self.stream = stream
-        self.stream.save(path, default_blueprint=blueprint)  # a file sink: before any logging
+        self.stream.save(path)  # a file sink: before any logging
         atexit.register(self.close)
         self.closed = False
-        _log_scene(self.stream, world, index, self.entities, options.contacts)
+        # the blueprint as its .rbl file's contents (rerun's own importer reads them)
+        self.stream.log_file_from_contents(file_path="blueprint.rbl",
+                                           file_contents=layout.blueprint)
+        _log_scene(self.stream, world, index, layout, options.contacts)
 
     def log_markers(self, markers: list) -> None:
-        """Static goal markers: (shape, Pose, RGBA uint8 (4,)) each."""
+        """Static goal markers: (shape, Pose, RGBA uint8 (4,)) each, as a pose and the
+        shape's geometry in the marker's frame."""
         for k, (shape, pose, rgba) in enumerate(markers):
-            _log_geometry(self.stream, f"world/goals/{k}", shape, pose, rgba)
+            self.stream.log(f"world/goals/{k}", _transform(pose.position, pose.orientation),
+                            *self.layout.marker_geometry(k, shape, rgba), static=True)
 
     def log_action_names(self, names) -> None:
         """Name the series of ``/action`` (one name per action entry)."""
@@ -406,20 +453,17 @@ class _Rows:
 
 # -- static scene -------------------------------------------------------------------------------
 
-def _log_scene(stream: rr.RecordingStream, world, index: int, entities: list[str],
+def _log_scene(stream: rr.RecordingStream, world, index: int, layout: _Layout,
                contacts: bool) -> None:
-    """Coordinates, every body's geometry in its body frame (static bodies with their pose),
-    the contacts' styles."""
-    scene: Scene = world.scene
+    """Coordinates, every body's geometry in its body frame (static bodies with their pose in
+    world ``index``), the contacts' styles."""
     stream.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-    colors = np.round(255 * _body_colors(scene, None)).astype(np.uint8)
-    for body, path in zip(scene.bodies, entities):
+    for body, path, archetypes in zip(world.scene.bodies, layout.entities, layout.geometry):
         if body.motion == STATIC:
             stream.log(path, _transform(world.state.position[index, body.index],
                                         world.state.orientation[index, body.index]),
                        static=True)
-        _log_geometry(stream, path, body.shape, body.body_from_shape,
-                      np.append(colors[body.index], 255))
+        stream.log(path, *archetypes, static=True)
     if contacts:
         stream.log("world/contacts/points",
                    rr.Points3D.from_fields(radii=[0.004], colors=[CONTACT_COLOR]), static=True)
@@ -427,18 +471,17 @@ def _log_scene(stream: rr.RecordingStream, world, index: int, entities: list[str
                    rr.Arrows3D.from_fields(radii=[0.002], colors=[FORCE_COLOR]), static=True)
 
 
-def _log_geometry(stream: rr.RecordingStream, path: str, shape, pose: Pose,
-                  rgba: np.ndarray) -> None:
-    """Log ``shape`` placed at ``pose`` in the frame of entity ``path``, in colour ``rgba``
-    (4,) uint8, as one static row: a Compound's parts are flattened, and primitives of a
-    kind share one archetype (its instances placed by their poses)."""
+def _geometry(shape, pose: Pose, rgba: np.ndarray) -> list:
+    """The archetypes that draw ``shape`` placed at ``pose`` in an entity's frame, in colour
+    ``rgba`` (4,) uint8, to be logged as one static row: a Compound's parts are flattened,
+    and primitives of a kind share one archetype (its instances placed by their poses)."""
     leaves = _primitives(shape, pose)
     archetypes = []
     for kind, build in _ARCHETYPES:
         parts = [(s, p) for s, p in leaves if isinstance(s, kind)]
         if parts:
             archetypes.append(build(parts, rgba))
-    stream.log(path, *archetypes, static=True)
+    return archetypes
 
 
 def _primitives(shape, pose: Pose) -> list:
@@ -529,6 +572,17 @@ class _Markers:
         rgba = np.round(255 * np.append(np.asarray(color, dtype=np.float64), alpha))
         self.shapes.append((shape, Pose(position, orientation), rgba.astype(np.uint8)))
         return len(self.shapes) - 1
+
+
+@functools.lru_cache(maxsize=32)
+def _blueprint_file(application_id: str, eye: tuple | None, target: tuple | None,
+                    scalars: bool, grid: bool) -> bytes:
+    """``_blueprint(eye, target, scalars, grid)`` saved for ``application_id`` as an ``.rbl``
+    file's bytes; built once per layout (it takes ~25 ms)."""
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "blueprint.rbl"
+        _blueprint(eye, target, scalars, grid).save(application_id, path)
+        return path.read_bytes()
 
 
 def _blueprint(eye, target, scalars: bool, grid: bool) -> rrb.Blueprint:
