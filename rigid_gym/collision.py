@@ -14,7 +14,6 @@ import numpy as np
 from rigid_gym.geometry import Geometry
 from rigid_gym.kernels.broadphase import find_pairs
 from rigid_gym.kernels.contacts import detect_contacts
-from rigid_gym.kernels.jit import for_worlds
 from rigid_gym.kernels.step import Pairs
 
 SWEEP_MIN_BODIES = 64
@@ -92,9 +91,8 @@ class Collider:
         state's poses (a ``world.State``), boxes grown by margin (m) and by how far the bodies
         can move in dt under an acceleration bound (m/s^2); for ``worlds`` (a slice)."""
         part = type(state)(*(a[worlds] for a in state))
-        pairs = for_worlds(find_pairs, len(range(*worlds.indices(len(self.pair_count)))))
         while True:
-            pairs(part.position, part.rotation, part.velocity, part.angular_velocity,
+            find_pairs(part.position, part.rotation, part.velocity, part.angular_velocity,
                   self.motion, self.geometry, margin, dt, acceleration, self.sweep,
                   self.bounds[worlds], self.order[worlds], self.pair_a[worlds],
                   self.pair_b[worlds], self.pair_count[worlds], self.keys[worlds],
@@ -110,9 +108,8 @@ class Collider:
             worlds = slice(worlds, worlds + 1)
         self.find_pairs(state, margin, worlds=worlds)
         part = type(state)(*(a[worlds] for a in state))
-        detect = for_worlds(detect_contacts, len(range(*worlds.indices(len(self.pair_count)))))
         while True:
-            detect(part.position, part.rotation, self.geometry, self.pair_a[worlds],
+            detect_contacts(part.position, part.rotation, self.geometry, self.pair_a[worlds],
                    self.pair_b[worlds], self.pair_count[worlds], margin, self.body_a[worlds],
                    self.body_b[worlds], self.point[worlds], self.normal[worlds],
                    self.depth[worlds], self.contact_count[worlds])

@@ -3,21 +3,35 @@
 :func:`step` runs each phase as one kernel call over every world at once; ``SolverConfig``
 switches phases off and ``Profile`` times them. Reading it top to bottom is reading the
 algorithm. :func:`advance` runs the same phases in the same order inside one kernel call for
-many steps (``kernels/step.py``): the fast path ``World.step`` takes unless it is profiling;
-the two give bit-identical states.
+many steps: the fast path ``World.step`` takes unless it is profiling. Both call the same
+kernel (``kernels.step.step_worlds``, phases selected by bits), so they give bit-identical
+states. A batch of worlds is shared out over threads in ranges of worlds (the kernel releases
+the GIL); a single world runs on the calling thread.
 """
 
 from __future__ import annotations
 
+import os
 import time
 from collections import defaultdict
+from concurrent.futures import ThreadPoolExecutor
 
+import numba
 import numpy as np
 
 from rigid_gym.config import SolverConfig
 from rigid_gym.kernels import integrate, solver
-from rigid_gym.kernels.jit import for_worlds
-from rigid_gym.kernels.step import Settings, step_world, step_worlds
+from rigid_gym.kernels.step import (
+    BROAD_PHASE,
+    COLLISION_PHASE,
+    CONTACT_PHASE,
+    EVERY_PHASE,
+    POSITION_PHASE,
+    SHOCK_PHASE,
+    VELOCITY_PHASE,
+    Settings,
+    step_worlds,
+)
 
 SUPPORT_CONTACTS = 4
 """Room for one body's contacts with its frozen supports in shock propagation, in pair
@@ -89,76 +103,87 @@ def settings(config: SolverConfig, gravity: np.ndarray, sweep: bool) -> Settings
                     magnitude, up)
 
 
-def advance(world, steps: int) -> None:
-    """Advance every world of ``world`` by ``steps`` steps in one kernel call (more only when
-    the pair buffers must grow first). A single world runs on the calling thread."""
+THREADS = min(numba.config.NUMBA_NUM_THREADS,
+              len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count())
+"""Threads a batch of worlds is shared out over: the cores this process may use, at most
+``NUMBA_NUM_THREADS`` (the environment variable limits it as it limits numba's own pool)."""
+RANGES_PER_THREAD = 4
+"""Ranges of worlds per thread, so that a thread whose worlds are quick takes another range."""
+_pool: ThreadPoolExecutor | None = None
+
+
+def advance(world, steps: int, phases: int = EVERY_PHASE) -> None:
+    """Advance every world of ``world`` by ``steps`` steps, running the ``phases`` bits of
+    each (``kernels.step``), in one kernel call per range of worlds (more only when the pair
+    buffers must grow first)."""
     s, m, geo, pairs, work = world.state, world.model, world.geometry, world.collider, world.workspace
     done = np.zeros(world.num_worlds, dtype=np.int64)
     while True:
         work.fit_pairs(pairs.pair_a.shape[1])
-        args = (world.dt, s, m, geo, pairs.pairs, work.scratch, work.wide, work.graph,
-                world.settings, world.attached)
-        if world.num_worlds == 1:
-            done[0] += step_world(0, steps - done[0], *args)
+        args = (steps, phases, done, world.dt, s, m, geo, pairs.pairs, work.scratch, work.wide,
+                work.graph, world.settings, world.attached)
+        ranges = _world_ranges(world.num_worlds)
+        if len(ranges) == 1:
+            step_worlds(*ranges[0], *args)
         else:
-            step_worlds(steps, done, *args)
+            for future in [_threads().submit(step_worlds, *r, *args) for r in ranges]:
+                future.result()
         if np.all(done == steps):
             return
         pairs.grow_pairs()
 
 
-def place_attached(world, index: int | None = None) -> None:
-    """Put every attached body (``World.attach``) at its offset from its parent, in every
-    world or in world ``index`` only."""
+def _world_ranges(num_worlds: int) -> list[tuple[int, int]]:
+    """(first, last) ranges covering the worlds, RANGES_PER_THREAD per thread (one range when
+    there is one thread or one world)."""
+    count = min(num_worlds, 1 if THREADS == 1 else THREADS * RANGES_PER_THREAD)
+    bounds = np.linspace(0, num_worlds, count + 1).round().astype(int)
+    return list(zip(bounds[:-1].tolist(), bounds[1:].tolist()))
+
+
+def _threads() -> ThreadPoolExecutor:
+    """The process's pool of THREADS threads, started at the first batched step."""
+    global _pool
+    if _pool is None:
+        _pool = ThreadPoolExecutor(THREADS, thread_name_prefix="rigid_gym-step")
+    return _pool
+
+
+def place_attached(world, index: int) -> None:
+    """Put every attached body (``World.attach``) of world ``index`` at its offset from its
+    parent."""
     s, a = world.state, world.attached
-    args = (s.position, s.orientation, s.velocity, s.angular_momentum, s.angular_velocity,
-            s.rotation, a.parent, a.offset_position, a.offset_orientation)
-    if index is not None:
-        integrate.place_attached(index, *args)
-    else:
-        for_worlds(integrate.place_attached_bodies, world.num_worlds)(*args)
+    integrate.place_attached(index, s.position, s.orientation, s.velocity, s.angular_momentum,
+                             s.angular_velocity, s.rotation, a.parent, a.offset_position,
+                             a.offset_orientation)
 
 
-def step(world, config: SolverConfig, dt: float, profile: Profile) -> None:
-    """Advance every world of ``world`` (a :class:`rigid_gym.World`) by ``dt`` seconds, one
-    kernel call per phase, timing each phase into ``profile``."""
-    s, m, geo, pairs, work = world.state, world.model, world.geometry, world.collider, world.workspace
-    # light kernels run serially for a single world (waking the thread pool costs more than
-    # their work); the solver phases run their parallel code on the calling thread alone
-    k = lambda compiled: for_worlds(compiled, world.num_worlds)  # noqa: E731
-    place_attached(world)  # held bodies start the step at their place
-    gravity = float(np.linalg.norm(m.gravity))
+def step(world, config: SolverConfig, profile: Profile) -> None:
+    """Advance every world of ``world`` (a :class:`rigid_gym.World`) by one step, one kernel
+    call per phase, timing each phase into ``profile``."""
+    gravity = float(np.linalg.norm(world.model.gravity))
     on = config.phases(gravity > 0.0)
     # 0. broad phase: every pair whose boxes may meet within this step (velocities included);
-    #    when no world has one, the impulse phases have nothing to do
+    #    held bodies are put at their place first. When no world has a pair, the impulse
+    #    phases have nothing to do
+    run = lambda name, bit: profile.run(name, advance, world, 1, bit)  # noqa: E731
     if on["broad_phase"]:
-        profile.run("broad_phase", pairs.find_pairs, s, 0.0, dt, gravity)
-        pairs.pair_impulse.fill(0.0)  # Coulomb's limit applies to each pair's step total
-        if not pairs.pair_count.any():
-            on = {**on, "collision": False, "contact": False, "shock_propagation": False}
-    work.fit_pairs(pairs.pair_a.shape[1])
+        run("broad_phase", BROAD_PHASE)
+    else:
+        advance(world, 1, BROAD_PHASE)  # places held bodies, finds no pair
+    if not world.collider.pair_count.any():
+        on = {**on, "collision": False, "contact": False, "shock_propagation": False}
     # 1. collision: at poses predicted with the old velocities, real restitution
     if on["collision"]:
-        profile.run("collision", solver.resolve_contacts, s, m, geo, pairs.pair_a, pairs.pair_b,
-                    pairs.pair_count, pairs.pair_impulse, dt, solver.COLLISION,
-                    config.collision_passes, work.scratch)
+        run("collision", COLLISION_PHASE)
     # 2. velocity update: V += dt (g + F/M), L += dt tau
-    profile.run("update_velocities", k(integrate.update_velocities),
-                s.velocity, s.angular_momentum, s.angular_velocity, s.rotation, s.force, s.torque,
-                m.inverse_mass, m.inverse_moments, m.motion, m.gravity, dt)
+    run("update_velocities", VELOCITY_PHASE)
     # 3. contact: predicted with the new velocities, restitution ramping from -0.9 to 0
     if on["contact"]:
-        profile.run("contact", solver.resolve_contacts, s, m, geo, pairs.pair_a, pairs.pair_b,
-                    pairs.pair_count, pairs.pair_impulse, dt, solver.CONTACT,
-                    config.contact_passes, work.scratch)
+        run("contact", CONTACT_PHASE)
     # 4. shock propagation: level by level from the ground up, lower levels frozen
     if on["shock_propagation"]:
-        profile.run("shock_propagation", solver.propagate_shock, s, m, geo, pairs.pair_a,
-                    pairs.pair_b, pairs.pair_count, pairs.pair_impulse, dt, world.settings.up,
-                    config.shock_sweeps, work.scratch, work.wide, work.graph)
-    # 5. position update with the final velocities: X += dt V, q by the exact rotation
-    profile.run("update_positions", k(integrate.update_positions),
-                s.position, s.orientation, s.velocity, s.angular_momentum, s.angular_velocity,
-                s.rotation, s.torque, m.inverse_moments, m.motion, dt, config.rotation_order)
-    s.force.fill(0.0)
-    s.torque.fill(0.0)
+        run("shock_propagation", SHOCK_PHASE)
+    # 5. position update with the final velocities: X += dt V, q by the exact rotation; held
+    #    bodies put at their place again
+    run("update_positions", POSITION_PHASE)

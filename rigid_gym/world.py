@@ -24,7 +24,6 @@ from rigid_gym import quaternion as quat
 from rigid_gym.config import SolverConfig
 from rigid_gym.kernels import integrate
 from rigid_gym.kernels.integrate import DYNAMIC, STATIC
-from rigid_gym.kernels.jit import calling_thread_only, for_worlds
 from rigid_gym.kernels.step import Attachments
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Compound, Mesh
@@ -133,11 +132,9 @@ class World:
             pipeline.advance(self, int(n))
             self.steps += int(n)
             return
-        with calling_thread_only(self.num_worlds == 1):
-            for _ in range(int(n)):
-                pipeline.step(self, self.config, self.dt, self._profile)
-                self.steps += 1
-            pipeline.place_attached(self)
+        for _ in range(int(n)):
+            pipeline.step(self, self.config, self._profile)
+            self.steps += 1
 
     def reset(self, world: int | None = None) -> None:
         """Put every world (or only ``world``) back to the scene's initial state; the step
@@ -201,7 +198,8 @@ class World:
         self.attached.parent[worlds, i] = -1
 
     def _place_attached(self, worlds) -> None:
-        pipeline.place_attached(self, None if isinstance(worlds, slice) else worlds)
+        for index in range(self.num_worlds)[worlds] if isinstance(worlds, slice) else [worlds]:
+            pipeline.place_attached(self, index)
 
     def view(self, world: int) -> WorldView:
         """One world of a batched World, seen as an unbatched one (``WorldView``)."""
@@ -394,8 +392,7 @@ class World:
         s, m = self.state, self.model
         if not isinstance(worlds, slice):
             worlds = slice(worlds, worlds + 1)
-        count = len(range(*worlds.indices(self.num_worlds)))
-        for_worlds(integrate.refresh_rotation_and_angular_velocity, count)(
+        integrate.refresh_rotation_and_angular_velocity(
             s.orientation[worlds], s.angular_momentum[worlds], m.inverse_moments[worlds],
             m.motion, s.rotation[worlds], s.angular_velocity[worlds])
 

@@ -151,20 +151,37 @@ def test_the_file_holds_the_episode_exactly(env_id, tmp_path):
 
 
 @pytest.mark.parametrize("env_id", TASK_IDS)
-def test_geometry_and_goals_are_stored_once(env_id, tmp_path):
+def test_geometry_goals_and_layout_are_in_every_file_once(env_id, tmp_path):
+    """The second file reuses what the first built (geometry, layout): both hold it all."""
     env = RecordRerun(gym.make(env_id, max_episode_steps=3), tmp_path,
                       episode_trigger=lambda k: True, run="test")
-    run_episode(env, seed=0)
-    (path,) = env.paths
-    counts = static_rows(path)
-    for body in env.unwrapped.scene.bodies:  # one row of geometry per body
-        entity = f"/world/bodies/{body.name}"
-        geometry = {k: n for k, n in counts.items()
-                    if k[0] == entity and not k[1].startswith("Transform3D")}
-        assert geometry and set(geometry.values()) == {1}, (body.name, geometry)
-    goals = {k for k in counts if k[0].startswith("/world/goals/")}
-    assert goals and all(counts[k] == 1 for k in goals)
-    assert counts[("/world", "ViewCoordinates:xyz")] == 1
+    for seed in range(2):
+        run_episode(env, seed=seed)
+        goals = [static_transform(env.paths[-1], f"/world/goals/{k}")
+                 for k in range(len(env.unwrapped.goal) // 3)]
+        np.testing.assert_allclose(np.concatenate(goals)[:, :2],
+                                   env.unwrapped.goal.reshape(-1, 3)[:, :2].astype(np.float32))
+    assert len(env.paths) == 2
+    for path in env.paths:
+        assert len(RrdReader(path).blueprints()) == 1
+        counts = static_rows(path)
+        for body in env.unwrapped.scene.bodies:  # one row of geometry per body
+            entity = f"/world/bodies/{body.name}"
+            geometry = {k: n for k, n in counts.items()
+                        if k[0] == entity and not k[1].startswith("Transform3D")}
+            assert geometry and set(geometry.values()) == {1}, (body.name, geometry)
+        goals = {k for k in counts if k[0].startswith("/world/goals/")}
+        assert goals and all(counts[k] == 1 for k in goals)
+        assert counts[("/world", "ViewCoordinates:xyz")] == 1
+
+
+def static_transform(path, entity: str) -> np.ndarray:
+    """The static translation (1, 3) of ``entity``."""
+    for chunk in RrdReader(path).stream().filter(is_static=True, content=entity):
+        batch = chunk.to_record_batch()
+        if "Transform3D:translation" in batch.schema.names:
+            return rows(batch.column("Transform3D:translation"), 3)
+    raise AssertionError(f"{path} has no static translation at {entity}")
 
 
 def test_an_exception_in_step_leaves_a_complete_file_with_the_steps_so_far(tmp_path):

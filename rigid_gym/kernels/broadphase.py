@@ -11,7 +11,7 @@ Pairs in which neither body is dynamic are skipped: nothing could respond.
 import numpy as np
 
 from rigid_gym.kernels.integrate import DYNAMIC
-from rigid_gym.kernels.jit import kernel, prange
+from rigid_gym.kernels.jit import kernel
 
 
 @kernel
@@ -178,12 +178,12 @@ def find_world_pairs(position, rotation, velocity, angular_velocity, motion, geo
     return count
 
 
-@kernel(parallel=True)
+@kernel
 def find_pairs(position, rotation, velocity, angular_velocity, motion, geo, margin, dt,
                acceleration, sweep, bounds, order, pair_a, pair_b, pair_count, keys, tmp):
     """``find_world_pairs`` for every world: arrays as there with a leading world axis B;
     pair_count (B,) int32 out."""
-    for w in prange(position.shape[0]):
+    for w in range(position.shape[0]):
         pair_count[w] = find_world_pairs(position[w], rotation[w], velocity[w],
                                          angular_velocity[w], motion, geo, margin, dt,
                                          acceleration, sweep, bounds[w], order[w], pair_a[w],

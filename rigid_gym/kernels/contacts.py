@@ -2,11 +2,11 @@
 
 import numpy as np
 
-from rigid_gym.kernels.jit import kernel, prange
+from rigid_gym.kernels.jit import kernel
 from rigid_gym.kernels.narrowphase import collide_bodies
 
 
-@kernel(parallel=True)
+@kernel(allocates=True)
 def detect_contacts(position, rotation, geo, pair_a, pair_b, pair_count, margin,
                     body_a, body_b, point, normal, depth, contact_count):
     """Contacts of every candidate pair of every world at the given poses.
@@ -19,7 +19,7 @@ def detect_contacts(position, rotation, geo, pair_a, pair_b, pair_count, margin,
     """
     num_worlds = position.shape[0]
     capacity = depth.shape[1]
-    for w in prange(num_worlds):
+    for w in range(num_worlds):
         scratch = np.empty((3, 16, 3))
         count = 0
         for p in range(pair_count[w]):

@@ -23,7 +23,7 @@ A step is cut into sub-steps of at most a quarter turn (|omega| h <= pi/2, slide
 
 import math
 
-from rigid_gym.kernels.jit import kernel, prange
+from rigid_gym.kernels.jit import kernel
 from rigid_gym.kernels.quaternion import (
     apply_inverse_inertia,
     cross,
@@ -39,14 +39,14 @@ DYNAMIC = 2
 QUARTER_TURN = 0.5 * math.pi
 
 
-@kernel(parallel=True)
+@kernel
 def refresh_rotation_and_angular_velocity(
     orientation, angular_momentum, inverse_moments, motion, rotation, angular_velocity
 ):
     """Recompute R(q) for every body and omega = I(t)^-1 L for dynamic bodies (after q or L
     were set from outside)."""
     num_worlds, num_bodies = orientation.shape[0], orientation.shape[1]
-    for w in prange(num_worlds):
+    for w in range(num_worlds):
         for i in range(num_bodies):
             rotation_from_quaternion(orientation[w, i], rotation[w, i])
             if motion[i] == DYNAMIC:
@@ -80,15 +80,6 @@ def update_world_velocities(
         angular_velocity[w, i, 2] = oz
 
 
-@kernel(parallel=True)
-def update_velocities(
-    velocity, angular_momentum, angular_velocity, rotation, force, torque,
-    inverse_mass, inverse_moments, motion, gravity, dt,
-):
-    """``update_world_velocities`` for every world."""
-    for w in prange(velocity.shape[0]):
-        update_world_velocities(w, velocity, angular_momentum, angular_velocity, rotation, force,
-                                torque, inverse_mass, inverse_moments, motion, gravity, dt)
 
 
 @kernel
@@ -166,16 +157,6 @@ def update_world_positions(
         angular_velocity[w, i, 2] = oz
 
 
-@kernel(parallel=True)
-def update_positions(
-    position, orientation, velocity, angular_momentum, angular_velocity, rotation, torque,
-    inverse_moments, motion, dt, order,
-):
-    """``update_world_positions`` for every world."""
-    for w in prange(position.shape[0]):
-        update_world_positions(w, position, orientation, velocity, angular_momentum,
-                               angular_velocity, rotation, torque, inverse_moments, motion, dt,
-                               order)
 
 
 @kernel
@@ -202,12 +183,3 @@ def place_attached(w, position, orientation, velocity, angular_momentum, angular
         q[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]
         normalize_quaternion(q)
         rotation_from_quaternion(q, rotation[w, i])
-
-
-@kernel(parallel=True)
-def place_attached_bodies(position, orientation, velocity, angular_momentum, angular_velocity,
-                          rotation, parent, offset_position, offset_orientation):
-    """``place_attached`` for every world."""
-    for w in prange(position.shape[0]):
-        place_attached(w, position, orientation, velocity, angular_momentum, angular_velocity,
-                       rotation, parent, offset_position, offset_orientation)

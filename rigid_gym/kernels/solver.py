@@ -33,7 +33,7 @@ import numpy as np
 
 from rigid_gym.kernels.impulse import add_point_mass_matrix, contact_impulse
 from rigid_gym.kernels.integrate import DYNAMIC, STATIC
-from rigid_gym.kernels.jit import kernel, prange
+from rigid_gym.kernels.jit import kernel
 from rigid_gym.kernels.narrowphase import collide_bodies
 from rigid_gym.kernels.patch import (
     APPLIED,
@@ -399,13 +399,6 @@ def resolve_world_contacts(state, model, geo, w, pair_a, pair_b, pairs, accumula
             break
 
 
-@kernel(parallel=True)
-def resolve_contacts(state, model, geo, pair_a, pair_b, pair_count, pair_impulse, dt, mode,
-                     passes, scratch):
-    """``resolve_world_contacts`` for every world; arrays with a leading world axis B."""
-    for w in prange(state.position.shape[0]):
-        resolve_world_contacts(state, model, geo, w, pair_a[w], pair_b[w], pair_count[w],
-                               pair_impulse[w], dt, mode, passes, scratch)
 
 
 Graph = namedtuple("Graph", "touching edge_from edge_to edge_start targets component "
@@ -640,12 +633,3 @@ def propagate_world_shock(state, model, geo, w, pair_a, pair_b, pairs, accumulat
                 if applied == 0:
                     break  # another sweep would find the same state and do nothing too
         start = end
-
-
-@kernel(parallel=True)
-def propagate_shock(state, model, geo, pair_a, pair_b, pair_count, pair_impulse, dt, up, sweeps,
-                    scratch, wide, graph):
-    """``propagate_world_shock`` for every world; arrays with a leading world axis B."""
-    for w in prange(state.position.shape[0]):
-        propagate_world_shock(state, model, geo, w, pair_a[w], pair_b[w], pair_count[w],
-                              pair_impulse[w], dt, up, sweeps, scratch, wide, graph)

@@ -1,11 +1,14 @@
-"""The whole step in one kernel call: every phase of one world, for many steps.
+"""The whole step in one kernel call: every phase of a range of worlds, for many steps.
 
-``step_world`` runs the phases of ``rigid_gym.pipeline.step`` in the same order on one world
-(broad phase, collision, velocity update, contact, shock propagation, position update), for
-``steps`` steps, without returning to Python in between: no allocation (every work array is
-given), and no per-phase call overhead. ``step_worlds`` does it for every world, in parallel
-over worlds. A world's arithmetic is the same whichever way it is stepped, so the results are
-bit-identical to the phase-by-phase pipeline and to stepping the worlds one by one.
+``step_world`` runs the phases (broad phase, collision, velocity update, contact, shock
+propagation, position update) in that order on one world, for ``steps`` steps, without
+returning to Python in between: no allocation (every work array is given), and no per-phase
+call overhead. ``step_worlds`` does it for a range of worlds; it is the only compiled entry to
+the solver, because numba optimises the whole solver again for every entry that calls it (and
+for every type signature): the phase-by-phase pipeline selects phases with the ``phases``
+bits, and batches run ranges of worlds on threads instead of a ``prange`` (a second entry).
+A world's arithmetic is the same whichever way it is stepped, so the results are
+bit-identical whether worlds run together or one by one, whole steps or phase by phase.
 """
 
 from collections import namedtuple
@@ -16,7 +19,7 @@ from rigid_gym.kernels.integrate import (
     update_world_positions,
     update_world_velocities,
 )
-from rigid_gym.kernels.jit import kernel, prange
+from rigid_gym.kernels.jit import kernel
 from rigid_gym.kernels.solver import (
     COLLISION,
     CONTACT,
@@ -43,66 +46,84 @@ off), the rotation order, sort and sweep on or off, whether the broad phase runs
 and the unit vector against gravity (3,)."""
 
 
-@kernel
-def step_world(w, steps, dt, state, model, geo, pairs, scratch, wide, graph, settings,
+BROAD_PHASE, COLLISION_PHASE, VELOCITY_PHASE, CONTACT_PHASE, SHOCK_PHASE, POSITION_PHASE = (
+    1, 2, 4, 8, 16, 32)
+"""Bits of ``phases``: which of a step's phases a call runs, in this order (the step's)."""
+EVERY_PHASE = 63
+"""All six: whole steps."""
+
+
+@kernel(inline=True)
+def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, graph, settings,
                attached):
-    """Advance world w by up to ``steps`` steps of dt (s); returns how many were done. Fewer
-    than ``steps`` means the pair buffers were too small for the next step (nothing of that
-    step was applied; pairs.pair_count[w] says how many pairs it needs).
+    """Advance world w by up to ``steps`` steps of dt (s), running the phases whose bits are
+    set in ``phases`` (EVERY_PHASE: whole steps); returns how many were done. Fewer than
+    ``steps`` means the pair buffers were too small for the next step (nothing of that step
+    was applied; pairs.pair_count[w] says how many pairs it needs).
 
     state, model: ``rigid_gym.world`` State and Model; geo: compiled geometry; pairs: Pairs;
     scratch, wide: batched ``solver.Scratch`` (one pair's contacts; one body's contacts with
     all its supports); graph: batched ``solver.Graph``; settings: Settings; attached:
-    Attachments, whose bodies are put at their place before every step and after the last.
-    Forces and torques act during the first step and are then cleared.
+    Attachments, whose bodies are put at their place before every step (with the broad phase)
+    and after the last (with the position update). Forces and torques act during the first
+    step and are cleared by its position update.
     """
     s, m, c, a = state, model, settings, attached
     capacity = pairs.pair_a.shape[1]
     for done in range(steps):
-        place_attached(w, s.position, s.orientation, s.velocity, s.angular_momentum,
-                       s.angular_velocity, s.rotation, a.parent, a.offset_position,
-                       a.offset_orientation)
-        count = 0
-        if c.broad_phase:
-            count = find_world_pairs(s.position[w], s.rotation[w], s.velocity[w],
-                                     s.angular_velocity[w], m.motion, geo, 0.0, dt, c.gravity,
-                                     c.sweep, pairs.bounds[w], pairs.order[w], pairs.pair_a[w],
-                                     pairs.pair_b[w], pairs.keys[w], pairs.tmp[w])
+        if phases & BROAD_PHASE:
+            place_attached(w, s.position, s.orientation, s.velocity, s.angular_momentum,
+                           s.angular_velocity, s.rotation, a.parent, a.offset_position,
+                           a.offset_orientation)
+            count = 0
+            if c.broad_phase:
+                count = find_world_pairs(s.position[w], s.rotation[w], s.velocity[w],
+                                         s.angular_velocity[w], m.motion, geo, 0.0, dt,
+                                         c.gravity, c.sweep, pairs.bounds[w], pairs.order[w],
+                                         pairs.pair_a[w], pairs.pair_b[w], pairs.keys[w],
+                                         pairs.tmp[w])
             pairs.pair_count[w] = count
             if count > capacity:
                 return done
             pairs.pair_impulse[w, :count] = 0.0  # Coulomb's limit applies to the step's total
+        count = pairs.pair_count[w]
         pair_a, pair_b, impulse = pairs.pair_a[w], pairs.pair_b[w], pairs.pair_impulse[w]
-        if c.collision_passes > 0 and count > 0:
+        if phases & COLLISION_PHASE and c.collision_passes > 0 and count > 0:
             resolve_world_contacts(s, m, geo, w, pair_a, pair_b, count, impulse, dt, COLLISION,
                                    c.collision_passes, scratch)
-        update_world_velocities(w, s.velocity, s.angular_momentum, s.angular_velocity,
-                                s.rotation, s.force, s.torque, m.inverse_mass,
-                                m.inverse_moments, m.motion, m.gravity, dt)
-        if c.contact_passes > 0 and count > 0:
+        if phases & VELOCITY_PHASE:
+            update_world_velocities(w, s.velocity, s.angular_momentum, s.angular_velocity,
+                                    s.rotation, s.force, s.torque, m.inverse_mass,
+                                    m.inverse_moments, m.motion, m.gravity, dt)
+        if phases & CONTACT_PHASE and c.contact_passes > 0 and count > 0:
             resolve_world_contacts(s, m, geo, w, pair_a, pair_b, count, impulse, dt, CONTACT,
                                    c.contact_passes, scratch)
-        if c.shock_sweeps > 0 and c.gravity > 0.0 and count > 0:
+        if phases & SHOCK_PHASE and c.shock_sweeps > 0 and c.gravity > 0.0 and count > 0:
             propagate_world_shock(s, m, geo, w, pair_a, pair_b, count, impulse, dt, c.up,
                                   c.shock_sweeps, scratch, wide, graph)
-        update_world_positions(w, s.position, s.orientation, s.velocity, s.angular_momentum,
-                               s.angular_velocity, s.rotation, s.torque, m.inverse_moments,
-                               m.motion, dt, c.rotation_order)
-        s.force[w] = 0.0
-        s.torque[w] = 0.0
-    place_attached(w, s.position, s.orientation, s.velocity, s.angular_momentum,
-                   s.angular_velocity, s.rotation, a.parent, a.offset_position,
-                   a.offset_orientation)
+        if phases & POSITION_PHASE:
+            update_world_positions(w, s.position, s.orientation, s.velocity, s.angular_momentum,
+                                   s.angular_velocity, s.rotation, s.torque, m.inverse_moments,
+                                   m.motion, dt, c.rotation_order)
+            s.force[w] = 0.0
+            s.torque[w] = 0.0
+    if phases & POSITION_PHASE:
+        place_attached(w, s.position, s.orientation, s.velocity, s.angular_momentum,
+                       s.angular_velocity, s.rotation, a.parent, a.offset_position,
+                       a.offset_orientation)
     return steps
 
 
-@kernel(parallel=True)
-def step_worlds(steps, done, dt, state, model, geo, pairs, scratch, wide, graph, settings,
-                attached):
-    """``step_world`` for every world, in parallel: each world w advances from done[w] (B,)
-    int64 steps to ``steps``, and done[w] is updated (short of ``steps`` when its pair buffers
-    were too small)."""
-    for w in prange(state.position.shape[0]):
+@kernel
+def step_worlds(first, last, steps, phases, done, dt, state, model, geo, pairs, scratch, wide,
+                graph, settings, attached):
+    """``step_world`` for worlds first, ..., last - 1, one after the other: each world w
+    advances from done[w] ((B,) int64) steps to ``steps``, and done[w] is updated (short of
+    ``steps`` when its pair buffers were too small). The one compiled entry to the step:
+    batches are shared out over threads by calling it on ranges of worlds
+    (``rigid_gym.pipeline.advance``), and the phase-by-phase pipeline calls it with one phase
+    bit at a time."""
+    for w in range(first, last):
         if done[w] < steps:
-            done[w] += step_world(w, steps - done[w], dt, state, model, geo, pairs, scratch, wide,
-                                  graph, settings, attached)
+            done[w] += step_world(w, steps - done[w], phases, dt, state, model, geo, pairs,
+                                  scratch, wide, graph, settings, attached)
