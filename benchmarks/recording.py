@@ -3,20 +3,26 @@
 For each task (through ``gym.make``, scripted policy, episodes of 50 steps, every episode
 recorded: the worst case; training records a few), ``--repeats`` rounds each time
 ``--episodes`` seeded episodes bare and the same episodes recorded, in alternating order so
-that load from other processes hits both alike. Reported: the median steps/s of each, the
-overhead (bare / recorded - 1), the recorder's own time per episode measured directly (all
-time in the wrapper that is not spent in the env: geometry at reset, buffering, sending the
-columns and closing the file at the episode's end) and its share of a recorded episode's
-time, the share it would have under the default trigger (``cubic_schedule``: 10 of the first
-1000 episodes recorded; derived from the measured time, not timed), and the size of a
-50-step episode's file, without and with contacts. On a loaded machine the steps/s ratio is
-noisier than the recorder's own time.
+that load from other processes hits both alike. A recorded round ends when the writer process
+has written all its files (``RecordRerun.sync``), and that wait is part of its time.
+Reported: the median steps/s of each, the overhead (bare / recorded - 1), the recorder's
+time per episode in the env's process measured directly (all time in the wrapper that is not
+spent in the env: buffering, handing rows over, the final wait) and its share of a recorded
+episode's time, the writer process's CPU time per episode (from /proc: what the files cost
+where there is no idle core for the writer), and the size of a 50-step episode's file,
+without and with contacts. On a loaded machine the steps/s ratio is noisier than the
+recorder's own time.
+
+``--training`` also times SAC + HER learning Push (PyTorch on one thread, as
+``rigid-gym train`` runs it) for ``TRAINING_STEPS`` env steps, bare and with every episode
+recorded, alternating, ``--repeats`` times each: what recording costs where it is used.
 
     python benchmarks/recording.py                  # about a minute on 2 cores
-    python benchmarks/recording.py --repeats 9 --episodes 8
+    python benchmarks/recording.py --repeats 9 --episodes 20 --training
 """
 
 import argparse
+import os
 import statistics
 import tempfile
 import time
@@ -26,13 +32,14 @@ import gymnasium as gym
 
 import rigid_gym  # noqa: F401  (registers the ids)
 from rigid_gym.envs.scripted import scripted_policy
-from rigid_gym.recording import RecordRerun, cubic_schedule
+from rigid_gym.recording import RecordRerun
+from rigid_gym.recording_writer import writer
 
 TASKS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
 STEPS = 50
 """Env steps per episode (Stack's own limit is 100; 50 keeps the tasks comparable)."""
-DEFAULT_FRACTION = sum(map(cubic_schedule, range(1000))) / 1000
-"""Share of the first 1000 episodes that the default trigger records (0.01)."""
+TRAINING_STEPS = 1500
+"""Env steps of each ``--training`` run (learning starts after 100)."""
 
 
 class EnvTime(gym.Wrapper):
@@ -67,8 +74,8 @@ def make(env_id: str, folder: Path | None, contacts: bool = False):
 
 
 def run_episodes(env, seeds) -> tuple[int, float]:
-    """(steps, wall seconds) of the scripted policy's episodes, one per seed (a recorder
-    completes each episode's file when it ends)."""
+    """(steps, wall seconds) of the scripted policy's episodes, one per seed; a recorder's
+    files are all written when it returns."""
     policy = scripted_policy(env)
     steps = 0
     start = time.perf_counter()
@@ -78,18 +85,27 @@ def run_episodes(env, seeds) -> tuple[int, float]:
         while not done:
             observation, _, terminated, truncated, _ = env.step(policy(observation))
             steps, done = steps + 1, terminated or truncated
+    if isinstance(env.env, RecordRerun):
+        env.env.sync()
     return steps, time.perf_counter() - start
 
 
+def cpu_seconds(pid: int) -> float:
+    """User + system CPU time (s) of process ``pid`` so far (Linux's /proc)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def measure(env_id: str, repeats: int, episodes: int, folder: Path) -> dict:
-    """Median steps/s bare and recorded, the recorder's median ms per episode, file sizes.
-    Each kind keeps one env for all its rounds, as training does (the recorder builds what
-    its files share at its first episode)."""
+    """Median steps/s bare and recorded, the recorder's median ms per episode, the writer's
+    CPU ms per episode, file sizes. Each kind keeps one env for all its rounds, as training
+    does (the recorder sends what its files share at its first episode)."""
     bare_rates, recorded_rates, recorder_ms = [], [], []
     seeds = range(episodes)
     envs = {"bare": make(env_id, None), "recorded": make(env_id, folder)}
     for env, _ in envs.values():
         run_episodes(env, [0])  # warm-up: numba caches, first allocations, shared layout
+    writer_start = cpu_seconds(writer().process.pid)
     for repeat in range(repeats):
         order = ("bare", "recorded") if repeat % 2 == 0 else ("recorded", "bare")
         for kind in order:
@@ -101,6 +117,7 @@ def measure(env_id: str, repeats: int, episodes: int, folder: Path) -> dict:
             else:
                 recorded_rates.append(steps / seconds)
                 recorder_ms.append(1e3 * (env.seconds - inner.seconds) / episodes)
+    writer_ms = 1e3 * (cpu_seconds(writer().process.pid) - writer_start) / (repeats * episodes)
     for env, _ in envs.values():
         env.close()
     sizes = {}
@@ -111,16 +128,40 @@ def measure(env_id: str, repeats: int, episodes: int, folder: Path) -> dict:
         sizes[contacts] = env.env.paths[0].stat().st_size / 1024
     bare, recorded = statistics.median(bare_rates), statistics.median(recorded_rates)
     return {"bare": bare, "recorded": recorded, "overhead": bare / recorded - 1.0,
-            "recorder_ms": statistics.median(recorder_ms),
+            "recorder_ms": statistics.median(recorder_ms), "writer_ms": writer_ms,
             "episode_ms": 1e3 * STEPS / recorded, "kib": sizes[False],
             "kib_contacts": sizes[True]}
+
+
+def training_rates(repeats: int, folder: Path) -> tuple[float, float]:
+    """Median env steps/s of SAC + HER on Push, bare and recording every episode."""
+    import torch
+    from stable_baselines3 import SAC, HerReplayBuffer
+
+    torch.set_num_threads(1)
+    rates = {"bare": [], "recorded": []}
+    for repeat in range(repeats):
+        for kind in ("bare", "recorded") if repeat % 2 == 0 else ("recorded", "bare"):
+            env = gym.make("rigid_gym/Push-v0")
+            if kind == "recorded":
+                env = RecordRerun(env, folder / "training", episode_trigger=lambda k: True,
+                                  run=f"r{repeat}")
+            model = SAC("MultiInputPolicy", env, replay_buffer_class=HerReplayBuffer,
+                        learning_starts=100, policy_kwargs={"net_arch": [64, 64]}, seed=0)
+            start = time.perf_counter()
+            model.learn(TRAINING_STEPS)
+            env.close()  # a recorder's last file is written before the clock stops
+            rates[kind].append(TRAINING_STEPS / (time.perf_counter() - start))
+    return statistics.median(rates["bare"]), statistics.median(rates["recorded"])
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--repeats", type=int, default=5, help="rounds per task (default 5)")
-    parser.add_argument("--episodes", type=int, default=4,
-                        help="episodes per round and kind (default 4)")
+    parser.add_argument("--episodes", type=int, default=10,
+                        help="episodes per round and kind (default 10)")
+    parser.add_argument("--training", action="store_true",
+                        help="also time SAC + HER training on Push, bare and recorded")
     args = parser.parse_args()
     if args.repeats < 1 or args.episodes < 1:
         parser.error(f"--repeats and --episodes must be >= 1, got {args.repeats}, "
@@ -128,17 +169,21 @@ def main() -> None:
     print(f"{STEPS}-step scripted episodes, every one recorded; medians of {args.repeats} "
           f"rounds of {args.episodes} episodes\n")
     print("| task | steps/s bare | steps/s recorded | overhead | recorder, ms per episode "
-          "(share) | share, default trigger | file per episode | with contacts |")
+          "(share) | writer CPU, ms per episode | file per episode | with contacts |")
     print("|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as folder:
         for env_id in TASKS:
             r = measure(env_id, args.repeats, args.episodes, Path(folder))
             share = r["recorder_ms"] / r["episode_ms"]
-            default = DEFAULT_FRACTION * r["recorder_ms"] / (1e3 * STEPS / r["bare"])
             print(f"| {env_id.split('/')[1]} | {r['bare']:,.0f} | {r['recorded']:,.0f} | "
-                  f"{100 * r['overhead']:+.1f}% | {r['recorder_ms']:.1f} ({100 * share:.1f}%) | "
-                  f"{100 * default:.2f}% | {r['kib']:.0f} KiB | {r['kib_contacts']:.0f} KiB |",
+                  f"{100 * r['overhead']:+.1f}% | {r['recorder_ms']:.2f} ({100 * share:.1f}%) | "
+                  f"{r['writer_ms']:.1f} | {r['kib']:.0f} KiB | {r['kib_contacts']:.0f} KiB |",
                   flush=True)
+        if args.training:
+            bare, recorded = training_rates(args.repeats, Path(folder))
+            print(f"\nSAC + HER on Push, {TRAINING_STEPS} env steps, medians of "
+                  f"{args.repeats}: {bare:,.0f} env steps/s bare, {recorded:,.0f} recording "
+                  f"every episode ({100 * (bare / recorded - 1):+.1f}%)")
 
 
 if __name__ == "__main__":

@@ -118,6 +118,7 @@ def record(env_id: str, policy: str, algo: str | None, episodes: int, seed: int,
             while not done:
                 observation, reward, terminated, truncated, info = env.step(act(observation))
                 steps, total, done = steps + 1, total + float(reward), terminated or truncated
+            env.sync()  # the file is written in the background: wait for it to print its size
             written = f"{env.paths[-1]} ({env.paths[-1].stat().st_size / 1024:.0f} KiB)" \
                 if len(env.paths) > episode else "not written (RERUN=off)"
             print(f"  episode {episode}: {steps} steps, return {total:.2f}, success "

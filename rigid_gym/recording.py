@@ -32,42 +32,43 @@ Timelines: ``step`` (sequence: env steps, 0 = the state after ``reset``; for a W
 every step from 0; rewards, actions and successes at steps 1, 2, ... (the step they led to).
 Rerun stores translations and quaternions as float32 and scalars as float64.
 
-**Cost.** Static geometry is logged once per file, from archetypes built once per scene, and
-the blueprint from ``.rbl`` bytes built once per layout (building both for every file took
-longer than the episode's data). Per step only numpy copies are buffered, and buffers are
-sent with ``send_columns`` at the end of an episode (or every ``chunk_steps`` steps, bounding
-memory). A 50-step Push file costs ~7 ms: half opening it (stream, file sink, blueprint,
-scene), half sending the columns and closing (``benchmarks/recording.py``).
+**Cost.** A rerun file costs ~7 ms of the calling thread and ~10 ms of CPU in all to make,
+however short the episode (stream, file sink, blueprint, scene, columns, closing, rerun's own
+threads): as long as a 50-step episode of the fastest task. The recorders therefore only
+buffer rows in numpy (~8 us per step) and hand each file's rows to a writer process
+(``rigid_gym.recording_writer``, one per recording process, started at its first file), which
+does all the rerun work at a lower priority while the env goes on: ~1 ms per file in the
+env's process, the rest on another core when there is one (``benchmarks/recording.py``).
+Rows are handed over at the end of an episode, or every ``chunk_steps`` steps, bounding
+memory.
 
-**Files are complete** when an episode ends (terminated or truncated), at ``close()``, when
-``step`` or ``reset`` raises (what was buffered is written, then the exception propagates), and
-at interpreter exit (an ``atexit`` hook closes any open file). A stream is created only when an
-episode starts, so the wrappers can be built inside SubprocVecEnv workers (each process
-writes its own files; the default run name contains the process id). ``RERUN=off`` in the
-environment turns recording off: nothing is written and nothing fails.
+**Files are complete** once the writer has written what it was handed: at the latest when
+``close()`` returns, when ``step`` or ``reset`` raises (what was buffered is written, then the
+exception propagates), and when the process exits (an ``atexit`` hook hands over any open
+file and waits for the writer); a process killed outright loses only the rows it had not
+handed over. Files of finished episodes are written in the background: ``sync()`` waits for
+them. Nothing is made until an episode starts, so the wrappers can be built inside
+SubprocVecEnv workers (each worker has its own writer and files; the default run name contains
+the process id). ``RERUN=off`` in the environment turns recording off: nothing is written and
+nothing fails.
 """
 
 from __future__ import annotations
 
 import atexit
-import functools
 import os
 import re
-import tempfile
 import time
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-import rerun as rr
-import rerun.blueprint as rrb
 
-from rigid_gym import quaternion as quat
 from rigid_gym.envs.base import RigidGymEnv
 from rigid_gym.kernels.integrate import STATIC
-from rigid_gym.render import MARKER_COLOR, _body_colors, _corner_normals, tessellate
-from rigid_gym.scene import Scene
-from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
+from rigid_gym.recording_writer import Writer, writer
+from rigid_gym.render import MARKER_COLOR
+from rigid_gym.shapes import Plane, Pose
 
 RECORDINGS = "recordings"
 """Default output folder of ``RecordRerun``."""
@@ -77,12 +78,8 @@ CONTACT_MARGIN = 1e-3
 """m: contacts closer than this are recorded (resting contacts barely overlap)."""
 FORCE_SCALE = 0.05
 """m of arrow per N of contact force (a 0.1 kg cube's weight, 0.98 N, is a 5 cm arrow)."""
-PLANE_HALF_SIZE = 1.0
-"""m: a Plane (the ground) is drawn as the square |x|, |y| <= this."""
 ACTION_NAMES = ("x", "y", "z", "grip")
 """Names of the action entries in the plots: the pad's motion along x, y, z, and the grip."""
-CONTACT_COLOR = (230, 40, 40)
-FORCE_COLOR = (250, 150, 30)
 RUN_PATTERN = re.compile(r"[A-Za-z0-9_.-]+")
 
 
@@ -101,7 +98,8 @@ class RecordRerun(gym.Wrapper):
     contacts: also record contact points and force arrows (``force_scale`` m per N).
     chunk_steps: steps buffered before they are sent (>= 1).
 
-    ``paths`` lists the files started so far.
+    ``paths`` lists the files started so far; files of finished episodes are written in the
+    background (``sync`` waits for them, ``close`` does too).
     """
 
     def __init__(self, env: gym.Env, folder: str | os.PathLike = RECORDINGS,
@@ -121,7 +119,7 @@ class RecordRerun(gym.Wrapper):
         self.options = _Options(contacts, force_scale, chunk_steps, "RecordRerun")
         self.paths: list[Path] = []
         self.episode_id = -1
-        self._layout: _Layout | None = None  # built at the first recorded episode
+        self._layout: tuple | None = None  # (scene, the writer's key): _scene_layout
         self._recording: _Recording | None = None
         self._step = 0
 
@@ -140,15 +138,20 @@ class RecordRerun(gym.Wrapper):
                 self._step += 1
                 self._record_step(action, reward, info)
         except BaseException:
-            self._end_episode()
+            self._end_episode(wait=True)
             raise
         if terminated or truncated:
             self._end_episode()
         return observation, reward, terminated, truncated, info
 
     def close(self):
-        self._end_episode()
+        self._end_episode(wait=True)
         super().close()
+
+    def sync(self) -> None:
+        """Wait until the files of finished episodes are written."""
+        if self.paths:
+            writer().sync()
 
     def _begin_episode(self) -> None:
         task = self.env.unwrapped
@@ -162,32 +165,34 @@ class RecordRerun(gym.Wrapper):
         try:
             markers = _Markers()
             task._add_markers(markers)
-            recording.log_markers(markers.shapes)
-            recording.log_action_names(ACTION_NAMES[:self.action_space.shape[0]])
+            recording.send("markers", markers.shapes)
+            recording.send("action_names", ACTION_NAMES[:self.action_space.shape[0]])
             recording.record_state(0)
         except BaseException:
-            self._end_episode()
+            self._end_episode(wait=True)
             raise
 
-    def _scene_layout(self) -> _Layout:
-        """The layout of the env's scene, built again only when the World is a new one."""
+    def _scene_layout(self, files: Writer) -> int:
+        """The writer's key of the env's scene layout, sent again only for a new World."""
         task = self.env.unwrapped
-        if self._layout is None or self._layout.scene is not task.world.scene:
+        if self._layout is None or self._layout[0] is not task.world.scene:
             eye, target, _ = task.camera_view
-            blueprint = _blueprint_file(self.folder.name, tuple(eye), tuple(target), True, False)
-            self._layout = _Layout(task.world.scene, self.folder.name, blueprint)
-        return self._layout
+            key = files.layout(task.world.scene, self.folder.name,
+                               (tuple(eye), tuple(target), True, False))
+            self._layout = (task.world.scene, key)
+        return self._layout[1]
 
     def _record_step(self, action, reward, info) -> None:
         self._recording.record_state(self._step)
         self._recording.record_scalars(self._step, float(reward),
-                                       np.asarray(action, dtype=np.float64).ravel(),
+                                       np.array(action, dtype=np.float64).ravel(),
                                        float(bool(info.get("is_success", False))))
 
-    def _end_episode(self) -> None:
+    def _end_episode(self, wait: bool = False) -> None:
+        """Hand the episode's file over to the writer; ``wait`` until it is written."""
         recording, self._recording = self._recording, None
         if recording is not None:
-            recording.close()
+            recording.close(wait)
 
 
 def cubic_schedule(episode: int) -> bool:
@@ -241,15 +246,15 @@ class WorldRecorder:
         if self._recording is not None:
             self._recording.record_state(self.world.steps)
 
-    def _layout(self) -> _Layout:
+    def _layout(self, files: Writer) -> int:
         grid = not any(isinstance(b.shape, Plane) for b in self.world.scene.bodies)
-        return _Layout(self.world.scene, self.application_id,
-                       _blueprint_file(self.application_id, None, None, False, grid))
+        return files.layout(self.world.scene, self.application_id, (None, None, False, grid))
 
     def close(self) -> None:
-        """Write what is buffered and complete the file (idempotent)."""
+        """Write what is buffered and complete the file; returns once it is written
+        (idempotent)."""
         if self._recording is not None:
-            self._recording.close()
+            self._recording.close(wait=True)
         self._state = "closed"
 
     def __enter__(self) -> WorldRecorder:
@@ -282,88 +287,51 @@ class _Options:
         self.chunk_steps = int(chunk_steps)
 
 
-class _Layout:
-    """What every file of one scene shares, built once (for each file, building them took
-    longer than writing an episode's data): every body's geometry as rerun archetypes in its
-    body frame, and the blueprint, the bytes of an ``.rbl`` file for ``application_id``
-    (``_blueprint_file``). ``scene``: the World's scene (``World.load`` keeps it: only poses
-    and materials change)."""
-
-    def __init__(self, scene: Scene, application_id: str, blueprint: bytes):
-        self.scene = scene
-        self.application_id = application_id
-        self.blueprint = blueprint
-        self.entities = [f"world/bodies/{rr.escape_entity_path_part(b.name)}"
-                         for b in scene.bodies]
-        colors = np.round(255 * _body_colors(scene, None)).astype(np.uint8)
-        self.geometry = [_geometry(body.shape, body.body_from_shape,
-                                   np.append(colors[body.index], 255)) for body in scene.bodies]
-        self._markers: dict[int, tuple] = {}
-
-    def marker_geometry(self, k: int, shape, rgba: np.ndarray) -> list:
-        """Marker k's archetypes in its own frame, built again only when its shape (object)
-        or colour differs from the last file's (Push's disc is a 48-gon mesh: ~1 ms)."""
-        last = self._markers.get(k)
-        if last is None or last[0] is not shape or not np.array_equal(last[1], rgba):
-            last = self._markers[k] = (shape, rgba, _geometry(shape, Pose(), rgba))
-        return last[2]
-
-
 def _open(path: Path, recording_id: str, world, index: int, options: _Options,
           layout) -> _Recording | None:
     """A new recording of world ``index`` of ``world`` to ``path``, or None when rerun is off
-    (``RERUN=off``, ``0`` or ``false``, which rerun documents; checked first so that no
-    disabled stream is made: rerun warns about each when it is dropped). ``layout``: a
-    function that gives the scene's ``_Layout``, called only when rerun is on."""
+    (``RERUN=off``, ``0`` or ``false``, which rerun documents). ``layout``: a function of the
+    writer that gives the key of the scene's layout there."""
     if os.environ.get("RERUN", "").strip().lower() in ("0", "off", "false"):
         return None
-    layout = layout()
-    stream = rr.RecordingStream(layout.application_id, recording_id=recording_id)
-    if not rr.is_enabled(stream):  # turned off some other way
-        return None
-    return _Recording(stream, path, world, index, options, layout)
+    path.parent.mkdir(parents=True, exist_ok=True)  # here, so that a bad folder fails here
+    files = writer()
+    return _Recording(files, path, recording_id, layout(files), world, index, options)
 
 
 class _Recording:
-    """One ``.rrd`` file of one world of ``world`` (index ``index``): the scene is logged on
-    creation; ``record_*`` buffer rows that ``flush`` sends as columns; ``close`` completes it.
-    """
+    """One file of one world of ``world`` (index ``index``): opened in the writer on
+    creation; ``record_*`` buffer rows, which ``flush`` hands to the writer; ``close``
+    completes the file."""
 
-    def __init__(self, stream: rr.RecordingStream, path: Path, world, index: int,
-                 options: _Options, layout: _Layout):
+    def __init__(self, files: Writer, path: Path, recording_id: str, layout: int, world,
+                 index: int, options: _Options):
+        self.files, self.path = files, path
         self.world, self.index, self.options = world, index, options
-        self.entities, self.layout = layout.entities, layout
-        self.moving = [b.index for b in world.scene.bodies if b.motion != STATIC]
+        bodies = world.scene.bodies
+        self.moving = np.array([b.index for b in bodies if b.motion != STATIC], dtype=np.intp)
+        statics = {b.index: (world.state.position[index, b.index].copy(),
+                             world.state.orientation[index, b.index].copy())
+                   for b in bodies if b.motion == STATIC}
         self.states = _Rows()
         self.scalars = _Rows()
         self.contacts = _Rows()
-        path.parent.mkdir(parents=True, exist_ok=True)
-        self.stream = stream
-        self.stream.save(path)  # a file sink: before any logging
-        atexit.register(self.close)
         self.closed = False
-        # the blueprint as its .rbl file's contents (rerun's own importer reads them)
-        self.stream.log_file_from_contents(file_path="blueprint.rbl",
-                                           file_contents=layout.blueprint)
-        _log_scene(self.stream, world, index, layout, options.contacts)
+        files.send("open", path, recording_id, layout, statics, options.contacts)
+        atexit.register(self.close)
 
-    def log_markers(self, markers: list) -> None:
-        """Static goal markers: (shape, Pose, RGBA uint8 (4,)) each, as a pose and the
-        shape's geometry in the marker's frame."""
-        for k, (shape, pose, rgba) in enumerate(markers):
-            self.stream.log(f"world/goals/{k}", _transform(pose.position, pose.orientation),
-                            *self.layout.marker_geometry(k, shape, rgba), static=True)
-
-    def log_action_names(self, names) -> None:
-        """Name the series of ``/action`` (one name per action entry)."""
-        self.stream.log("action", rr.SeriesLines(names=list(names)), static=True)
+    def send(self, kind: str, *values) -> None:
+        """Hand static content to the writer (``recording_writer``'s "markers" and
+        "action_names")."""
+        self.files.send(kind, self.path, *values)
 
     def record_state(self, step: int) -> None:
         """Buffer the moving bodies' poses (and contacts, if on) at ``step``."""
         w, s = self.world, self.world.state
         sim_time = w.time
-        self.states.append(step, sim_time, position=s.position[self.index, self.moving],
-                           orientation=s.orientation[self.index, self.moving])
+        self.states.append(step, sim_time,
+                           position=s.position[self.index].take(self.moving, axis=0),
+                           orientation=s.orientation[self.index].take(self.moving, axis=0))
         if self.options.contacts:
             points, origins, vectors = _contacts(w, self.index, self.options.force_scale)
             self.contacts.append(step, sim_time, points=points, origins=origins, vectors=vectors)
@@ -372,55 +340,41 @@ class _Recording:
 
     def record_scalars(self, step: int, reward: float, action: np.ndarray,
                        success: float) -> None:
-        """Buffer an env step's reward, action (a,) and success (0 or 1) at ``step``."""
+        """Buffer an env step's reward, action (a,) (the caller's own copy) and success (0 or
+        1) at ``step``."""
         self.scalars.append(step, self.world.time, reward=reward, action=action, success=success)
 
     def flush(self) -> None:
-        """Send every buffered row as columns and empty the buffers."""
+        """Hand every buffered row to the writer now, and empty the buffers."""
+        self._send_rows()
+        self.files.flush()
+
+    def close(self, wait: bool = False) -> None:
+        """Hand the remaining rows and the file's end to the writer; ``wait`` until it is
+        written. Idempotent."""
+        if not self.closed:
+            self.closed = True
+            atexit.unregister(self.close)
+            try:
+                self._send_rows()
+            finally:
+                self.files.send("close", self.path, flush=True)
+        if wait:
+            self.files.sync()
+
+    def _send_rows(self) -> None:
         if len(self.states):
-            self._send_states(*self.states.take())
+            steps, times, rows = self.states.take()
+            self.send("states", steps, times, np.stack(rows["position"]),
+                      np.stack(rows["orientation"]))
         if len(self.scalars):
-            self._send_scalars(*self.scalars.take())
+            steps, times, rows = self.scalars.take()
+            self.send("scalars", steps, times, np.array(rows["reward"]),
+                      np.stack(rows["action"]), np.array(rows["success"]))
         if len(self.contacts):
-            self._send_contacts(*self.contacts.take())
-
-    def close(self) -> None:
-        """Flush, then close the file (writes its footer). Idempotent."""
-        if self.closed:
-            return
-        self.closed = True
-        atexit.unregister(self.close)
-        try:
-            self.flush()
-        finally:
-            self.stream.disconnect()  # sends what the batcher holds, then writes the footer
-
-    def _send_states(self, indexes, rows: dict) -> None:
-        position = np.stack(rows["position"])  # (T, moving bodies, 3)
-        xyzw = _xyzw(np.stack(rows["orientation"]))
-        for k, body in enumerate(self.moving):
-            self.stream.send_columns(self.entities[body], indexes=indexes,
-                                     columns=rr.Transform3D.columns(translation=position[:, k],
-                                                                    quaternion=xyzw[:, k]))
-
-    def _send_scalars(self, indexes, rows: dict) -> None:
-        actions = np.stack(rows["action"])  # (T, a)
-        self.stream.send_columns("reward", indexes=indexes,
-                                 columns=rr.Scalars.columns(scalars=np.array(rows["reward"])))
-        self.stream.send_columns("success", indexes=indexes,
-                                 columns=rr.Scalars.columns(scalars=np.array(rows["success"])))
-        self.stream.send_columns("action", indexes=indexes, columns=rr.Scalars.columns(
-            scalars=actions.ravel()).partition(lengths=np.full(len(actions), actions.shape[1])))
-
-    def _send_contacts(self, indexes, rows: dict) -> None:
-        points, origins = rows["points"], rows["origins"]  # ragged: (k, 3) per row
-        points_column = rr.Points3D.columns(positions=np.concatenate(points))
-        arrows_column = rr.Arrows3D.columns(origins=np.concatenate(origins),
-                                            vectors=np.concatenate(rows["vectors"]))
-        self.stream.send_columns("world/contacts/points", indexes=indexes,
-                                 columns=points_column.partition(lengths=[len(p) for p in points]))
-        self.stream.send_columns("world/contacts/forces", indexes=indexes,
-                                 columns=arrows_column.partition(lengths=[len(o) for o in origins]))
+            steps, times, rows = self.contacts.take()
+            self.send("contacts", steps, times, rows["points"], rows["origins"],
+                      rows["vectors"])
 
 
 class _Rows:
@@ -435,129 +389,21 @@ class _Rows:
         return len(self.steps)
 
     def append(self, step: int, sim_time: float, **values) -> None:
-        """Values (numbers or arrays; arrays may differ in shape between rows) are copied."""
+        """Values: numbers, or arrays (which may differ in shape between rows) that are the
+        caller's own copies: they are kept, not copied again."""
         self.steps.append(step)
         self.times.append(sim_time)
         for name, value in values.items():
-            self.values.setdefault(name, []).append(np.array(value))
+            self.values.setdefault(name, []).append(value)
 
-    def take(self) -> tuple[list, dict]:
-        """(the two time columns, {name: list of rows}), and empty the buffer."""
-        nanoseconds = np.round(np.array(self.times) * 1e9).astype(np.int64)  # not truncated
-        indexes = [rr.TimeColumn("step", sequence=np.array(self.steps, dtype=np.int64)),
-                   rr.TimeColumn("sim_time", duration=nanoseconds.astype("timedelta64[ns]"))]
-        rows = self.values
+    def take(self) -> tuple[np.ndarray, np.ndarray, dict]:
+        """(steps (T,), times (T,) s, {name: list of rows}), and empty the buffer."""
+        steps, times, rows = np.array(self.steps), np.array(self.times), self.values
         self.steps, self.times, self.values = [], [], {}
-        return indexes, rows
+        return steps, times, rows
 
 
-# -- static scene -------------------------------------------------------------------------------
-
-def _log_scene(stream: rr.RecordingStream, world, index: int, layout: _Layout,
-               contacts: bool) -> None:
-    """Coordinates, every body's geometry in its body frame (static bodies with their pose in
-    world ``index``), the contacts' styles."""
-    stream.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-    for body, path, archetypes in zip(world.scene.bodies, layout.entities, layout.geometry):
-        if body.motion == STATIC:
-            stream.log(path, _transform(world.state.position[index, body.index],
-                                        world.state.orientation[index, body.index]),
-                       static=True)
-        stream.log(path, *archetypes, static=True)
-    if contacts:
-        stream.log("world/contacts/points",
-                   rr.Points3D.from_fields(radii=[0.004], colors=[CONTACT_COLOR]), static=True)
-        stream.log("world/contacts/forces",
-                   rr.Arrows3D.from_fields(radii=[0.002], colors=[FORCE_COLOR]), static=True)
-
-
-def _geometry(shape, pose: Pose, rgba: np.ndarray) -> list:
-    """The archetypes that draw ``shape`` placed at ``pose`` in an entity's frame, in colour
-    ``rgba`` (4,) uint8, to be logged as one static row: a Compound's parts are flattened,
-    and primitives of a kind share one archetype (its instances placed by their poses)."""
-    leaves = _primitives(shape, pose)
-    archetypes = []
-    for kind, build in _ARCHETYPES:
-        parts = [(s, p) for s, p in leaves if isinstance(s, kind)]
-        if parts:
-            archetypes.append(build(parts, rgba))
-    return archetypes
-
-
-def _primitives(shape, pose: Pose) -> list:
-    """(shape, Pose) of every primitive of ``shape`` placed at ``pose`` (Compounds flattened,
-    their part poses composed with ``pose``)."""
-    if not isinstance(shape, Compound):
-        return [(shape, pose)]
-    return [leaf for part, part_pose in shape.parts
-            for leaf in _primitives(part, Pose(pose.apply(part_pose.position),
-                                               quat.multiply(pose.orientation,
-                                                             part_pose.orientation)))]
-
-
-def _boxes(parts: list, rgba: np.ndarray) -> rr.Boxes3D:
-    """One box instance per (Box, Pose) in ``parts``, all in colour ``rgba`` (4,) uint8."""
-    return rr.Boxes3D(half_sizes=[s.half_extents for s, _ in parts],
-                      centers=[p.position for _, p in parts],
-                      quaternions=[_xyzw(p.orientation) for _, p in parts], colors=[rgba],
-                      fill_mode=rr.components.FillMode.Solid)
-
-
-def _spheres(parts: list, rgba: np.ndarray) -> rr.Ellipsoids3D:
-    """One ellipsoid instance per (Sphere, Pose) in ``parts`` (a sphere needs no turn)."""
-    return rr.Ellipsoids3D(half_sizes=[[s.radius] * 3 for s, _ in parts],
-                           centers=[p.position for _, p in parts], colors=[rgba],
-                           fill_mode=rr.components.FillMode.Solid)
-
-
-def _capsules(parts: list, rgba: np.ndarray) -> rr.Capsules3D:
-    """One capsule instance per (Capsule, Pose) in ``parts``. Ours are centred on their
-    origin; rerun's run from theirs along +z, so each starts at -half_length."""
-    return rr.Capsules3D(lengths=[2.0 * s.half_length for s, _ in parts],
-                         radii=[s.radius for s, _ in parts],
-                         translations=[p.apply([0.0, 0.0, -s.half_length]) for s, p in parts],
-                         quaternions=[_xyzw(p.orientation) for _, p in parts], colors=[rgba],
-                         fill_mode=rr.components.FillMode.Solid)
-
-
-def _meshes(parts: list, rgba: np.ndarray) -> rr.Mesh3D:
-    """Meshes as triangle soups with crease-aware normals (as the renderer shades them),
-    Planes as a square of PLANE_HALF_SIZE (two triangles) facing +z; all in one Mesh3D."""
-    positions, normals, triangles, count = [], [], [], 0
-    for shape, pose in parts:
-        if isinstance(shape, Plane):
-            h = PLANE_HALF_SIZE
-            corners = np.array([[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]])
-            faces = np.array([[0, 1, 2], [0, 2, 3]])
-            normal = np.tile([0.0, 0.0, 1.0], (4, 1))
-        else:
-            vertices, mesh_triangles = tessellate(shape)
-            corners = vertices[mesh_triangles].reshape(-1, 3)
-            faces = np.arange(len(corners)).reshape(-1, 3)
-            normal = _corner_normals(vertices, mesh_triangles)
-        positions.append(pose.apply(corners))
-        normals.append(normal @ pose.rotation().T)
-        triangles.append(faces + count)
-        count += len(corners)
-    return rr.Mesh3D(vertex_positions=np.concatenate(positions),
-                     vertex_normals=np.concatenate(normals),
-                     triangle_indices=np.concatenate(triangles), albedo_factor=rgba)
-
-
-_ARCHETYPES = ((Box, _boxes), (Sphere, _spheres), (Capsule, _capsules), ((Mesh, Plane), _meshes))
-"""(kind of primitive, the function that builds their archetype)."""
-
-
-def _transform(position, orientation) -> rr.Transform3D:
-    """position (3,) m, orientation (4,) (w, x, y, z)."""
-    return rr.Transform3D(translation=position,
-                          quaternion=rr.Quaternion(xyzw=_xyzw(orientation)))
-
-
-def _xyzw(q) -> np.ndarray:
-    """Quaternion(s) (..., 4) (w, x, y, z) -> rerun's (x, y, z, w)."""
-    return np.asarray(q)[..., [1, 2, 3, 0]]
-
+# -- helpers ------------------------------------------------------------------------------------
 
 class _Markers:
     """Collects an env's goal markers: stands in for the Renderer in ``_add_markers``."""
@@ -573,35 +419,6 @@ class _Markers:
         self.shapes.append((shape, Pose(position, orientation), rgba.astype(np.uint8)))
         return len(self.shapes) - 1
 
-
-@functools.lru_cache(maxsize=32)
-def _blueprint_file(application_id: str, eye: tuple | None, target: tuple | None,
-                    scalars: bool, grid: bool) -> bytes:
-    """``_blueprint(eye, target, scalars, grid)`` saved for ``application_id`` as an ``.rbl``
-    file's bytes; built once per layout (it takes ~25 ms)."""
-    with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / "blueprint.rbl"
-        _blueprint(eye, target, scalars, grid).save(application_id, path)
-        return path.read_bytes()
-
-
-def _blueprint(eye, target, scalars: bool, grid: bool) -> rrb.Blueprint:
-    """The 3D view (from ``eye`` (3,) m towards ``target`` (3,) m if given; rerun's line grid
-    at z = 0 only if ``grid``: a table would hide it), beside plots of the reward, the action
-    and success when ``scalars``; playing on ``sim_time``."""
-    controls = None if eye is None else rrb.EyeControls3D(position=eye, look_target=target)
-    view = rrb.Spatial3DView(origin="/world", name="scene", eye_controls=controls,
-                             line_grid=grid)
-    if scalars:
-        plots = rrb.Vertical(*(rrb.TimeSeriesView(origin=f"/{name}", name=name)
-                               for name in ("reward", "action", "success")))
-        view = rrb.Horizontal(view, plots, column_shares=[3, 1])
-    return rrb.Blueprint(view, rrb.BlueprintPanel(state="collapsed"),
-                         rrb.SelectionPanel(state="collapsed"),
-                         rrb.TimePanel(timeline="sim_time", play_state="playing"))
-
-
-# -- helpers ------------------------------------------------------------------------------------
 
 def _contacts(world, index: int, force_scale: float):
     """World ``index``'s contacts at the current poses: points (k, 3) m, and for every pair

@@ -4,6 +4,7 @@ after an episode, an exception, close() and in SubprocVecEnv workers, and bad in
 import subprocess
 import sys
 import textwrap
+import time
 
 import gymnasium as gym
 import numpy as np
@@ -95,6 +96,8 @@ def run_episode(env, seed: int):
         actions.append(action)
         rewards.append(reward)
         successes.append(float(info["is_success"]))
+    if isinstance(env, RecordRerun):
+        env.sync()  # the writer process writes finished episodes' files in the background
     return (np.array(positions), np.array(orientations), np.array(times), np.array(actions),
             np.array(rewards), np.array(successes))
 
@@ -216,6 +219,58 @@ def test_a_process_that_dies_of_an_exception_leaves_a_complete_file(tmp_path):
     path = tmp_path / "rigid_gym-Throw-v0" / "died-episode-0.rrd"
     step, _ = temporal(path, "/world/bodies/cube0", "Transform3D:translation")
     assert step.tolist() == list(range(6))
+
+
+def test_a_process_killed_outright_still_gets_its_finished_episodes_written(tmp_path):
+    """os._exit skips atexit, as a killed worker does: the writer, left alone, completes the
+    files it was handed."""
+    script = textwrap.dedent(f"""
+        import os
+        import gymnasium as gym
+        import rigid_gym
+        from rigid_gym.recording import RecordRerun
+        env = RecordRerun(gym.make("rigid_gym/Throw-v0", max_episode_steps=3),
+                          {str(tmp_path)!r}, episode_trigger=lambda k: True, run="killed")
+        for episode in range(2):
+            env.reset(seed=episode)
+            for _ in range(3):
+                env.step(env.action_space.sample())
+        env.reset(seed=2)
+        env.step(env.action_space.sample())
+        os._exit(1)
+    """)
+    subprocess.run([sys.executable, "-c", script], check=False)
+    folder = tmp_path / "rigid_gym-Throw-v0"
+    for episode in range(2):
+        path = folder / f"killed-episode-{episode}.rrd"
+        for _ in range(100):  # the writer outlives the process: wait for it to finish
+            if subprocess.run([find_rerun(), "rrd", "verify", str(path)],
+                              capture_output=True).returncode == 0:
+                break
+            time.sleep(0.1)
+        step, _ = temporal(path, "/world/bodies/cube0", "Transform3D:translation")
+        assert step.tolist() == [0, 1, 2, 3]
+
+
+def test_a_writer_that_died_is_reported_not_ignored(tmp_path):
+    from rigid_gym.recording_writer import writer
+
+    env = RecordRerun(gym.make("rigid_gym/Throw-v0", max_episode_steps=2), tmp_path,
+                      episode_trigger=lambda k: True, run="w")
+    run_episode(env, seed=0)
+    dead = writer()
+    dead.process.kill()
+    dead.process.wait()
+    with pytest.raises(RuntimeError, match="rerun writer process .* has ended"):
+        run_episode(env, seed=1)
+    with pytest.raises(RuntimeError, match="rerun writer process .* has ended"):
+        writer()  # a new recorder too: files handed to the dead writer may be lost
+    dead.stop()  # acknowledged: the next recording starts a new writer
+    fresh = RecordRerun(gym.make("rigid_gym/Throw-v0", max_episode_steps=2), tmp_path,
+                        episode_trigger=lambda k: True, run="fresh")
+    run_episode(fresh, seed=0)
+    assert writer() is not dead
+    assert (tmp_path / "rigid_gym-Throw-v0" / "fresh-episode-0.rrd").exists()
 
 
 def test_trigger_names_and_unfinished_episodes(tmp_path):

@@ -1,0 +1,412 @@
+"""The process that writes the rerun files of ``rigid_gym.recording``, and its client.
+
+A rerun file costs ~7 ms to make however short the episode: a stream, a file sink, the
+blueprint, the scene, the columns, and closing (which waits for rerun's own threads). That is
+about as long as a 50-step episode of the fastest task. So the recorders only buffer an
+episode's rows in numpy (~10 us a step) and hand them to a writer process, which does all the
+rerun work while the env goes on: one writer per recording process, started at its first file
+(``writer()``), each file written in the order its messages were sent.
+
+Messages are pickled tuples on the writer's standard input:
+
+- ``("layout", key, scene, application_id, blueprint)``: what files of ``scene`` share, built
+  once (``_Layout``); blueprint: the ``_blueprint`` arguments (eye, target, scalars, grid).
+- ``("open", path, recording_id, key, statics, contacts)``: start a file; statics: {body
+  index: (position (3,) m, orientation (4,) w, x, y, z)} of the static bodies.
+- ``("markers", path, markers)``: goal markers, (shape, Pose, RGBA uint8 (4,)) each.
+- ``("action_names", path, names)``.
+- ``("states" | "scalars" | "contacts", path, steps (T,), times (T,) s, values)``: rows.
+- ``("close", path)``: complete the file.
+- ``("sync",)``: answered on standard output once everything sent before it is written.
+- ``("stop",)``, or the end of the input (its client's process ended, however it ended):
+  complete every open file and exit.
+
+The writer runs at a lower priority (``NICENESS``) and ignores Ctrl-C, which a terminal sends
+to the whole process group: it finishes the files it was given when its client stops it or
+dies. Errors end it with a traceback on the
+shared standard error; the client then raises at its next message.
+"""
+
+from __future__ import annotations
+
+import atexit
+import functools
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import rerun as rr
+import rerun.blueprint as rrb
+
+from rigid_gym import quaternion as quat
+from rigid_gym.kernels.integrate import STATIC
+from rigid_gym.render import _body_colors, _corner_normals, tessellate
+from rigid_gym.scene import Scene
+from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
+
+SYNCED = b"rigid_gym.recording_writer: synced\n"
+"""The writer's answer to a sync."""
+NICENESS = 10
+"""The writer runs at a lower priority: where it competes with the env for a core, the env
+goes first, and the writer catches up while the env waits (on a full pipe, or a sync)."""
+PLANE_HALF_SIZE = 1.0
+"""m: a Plane (the ground) is drawn as the square |x|, |y| <= this."""
+MARKER_CACHE = 64
+"""Marker geometries kept per layout (``_Layout.marker``)."""
+CONTACT_COLOR = (230, 40, 40)
+FORCE_COLOR = (250, 150, 30)
+
+
+# -- the client ---------------------------------------------------------------------------------
+
+class Writer:
+    """A writer process and the pipe to it (``writer()`` gives the process's own)."""
+
+    def __init__(self):
+        self.owner = os.getpid()
+        self.process = subprocess.Popen([sys.executable, "-m", "rigid_gym.recording_writer"],
+                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+        self.layouts = 0
+        self.stopped = False
+        atexit.register(self.stop)
+
+    def layout(self, scene: Scene, application_id: str, blueprint: tuple) -> int:
+        """Send a ``_Layout`` to build; returns its key for ``open``."""
+        self.layouts += 1
+        self.send("layout", self.layouts, scene, application_id, blueprint)
+        return self.layouts
+
+    def send(self, *message, flush: bool = False) -> None:
+        """Hand ``message`` to the writer. Messages wait in an 8 KiB buffer until ``flush``
+        (the end of a file or of a chunk of rows), so that the writer wakes once per file,
+        not once per message; a send waits only when the pipe is full (the writer is behind
+        by ~64 KiB)."""
+        try:
+            pickle.dump(message, self.process.stdin, protocol=pickle.HIGHEST_PROTOCOL)
+        except (BrokenPipeError, ValueError) as error:  # ValueError: the pipe was closed
+            raise RuntimeError(self._ended()) from error
+        if flush:
+            self.flush()
+
+    def flush(self) -> None:
+        """Hand the buffered messages over now."""
+        try:
+            self.process.stdin.flush()
+        except (BrokenPipeError, ValueError) as error:
+            raise RuntimeError(self._ended()) from error
+
+    def sync(self) -> None:
+        """Wait until every file sent so far is written."""
+        self.send("sync", flush=True)
+        while True:
+            line = self.process.stdout.readline()
+            if line == SYNCED:
+                return
+            if not line:
+                raise RuntimeError(self._ended())
+
+    def stop(self) -> None:
+        """Let the writer complete every file and exit; wait for it (idempotent)."""
+        atexit.unregister(self.stop)
+        if os.getpid() != self.owner:  # a forked child's copy: the parent's writer
+            return
+        self.stopped = True
+        if self.process.poll() is None:
+            try:
+                self.send("stop", flush=True)
+                self.process.stdin.close()
+            except RuntimeError:
+                pass  # it ended already: its error is on standard error
+        self.process.wait()
+
+    def _ended(self) -> str:
+        return (f"the rerun writer process (rigid_gym.recording_writer) has ended (exit code "
+                f"{self.process.poll()}); its error, if any, is above on standard error")
+
+
+_writer: Writer | None = None
+
+
+def writer() -> Writer:
+    """This process's writer, started at the first call (again in a forked child, and after
+    ``stop``). Raises if it ended otherwise: the files it was handed may be lost."""
+    global _writer
+    if _writer is not None and _writer.owner == os.getpid():
+        if _writer.process.poll() is None:
+            return _writer
+        if not _writer.stopped:
+            raise RuntimeError(_writer._ended())
+    _writer = Writer()
+    return _writer
+
+
+# -- the writer process -------------------------------------------------------------------------
+
+def main() -> None:
+    """Write files from the messages on standard input until ``stop`` or its end."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    os.nice(NICENESS)
+    answers = os.fdopen(os.dup(1), "wb")  # standard output is for answers only:
+    os.dup2(2, 1)  # what anything else prints goes to standard error
+    source = sys.stdin.buffer
+    layouts: dict[int, _Layout] = {}
+    files: dict[Path, _File] = {}
+    try:
+        while True:
+            try:
+                kind, *args = pickle.load(source)
+            except EOFError:
+                break
+            if kind == "stop":
+                break
+            if kind == "sync":
+                answers.write(SYNCED)
+                answers.flush()
+            elif kind == "layout":
+                key, scene, application_id, blueprint = args
+                layouts[key] = _Layout(scene, application_id, _blueprint_file(application_id,
+                                                                               *blueprint))
+            elif kind == "open":
+                path, recording_id, key, statics, contacts = args
+                files[path] = _File(path, recording_id, layouts[key], statics, contacts)
+            elif kind == "close":
+                files.pop(args[0]).close()
+            else:
+                path, *values = args
+                getattr(files[path], kind)(*values)
+    finally:
+        for file in files.values():
+            file.close()
+
+
+class _Layout:
+    """What every file of one scene shares, built once (for each file, building them took
+    longer than writing an episode's data): every body's entity path and geometry as rerun
+    archetypes in its body frame, and the blueprint (the bytes of an ``.rbl`` file for
+    ``application_id``)."""
+
+    def __init__(self, scene: Scene, application_id: str, blueprint: bytes):
+        self.application_id = application_id
+        self.blueprint = blueprint
+        self.entities = [f"world/bodies/{rr.escape_entity_path_part(b.name)}"
+                         for b in scene.bodies]
+        colors = np.round(255 * _body_colors(scene, None)).astype(np.uint8)
+        self.geometry = [_geometry(body.shape, body.body_from_shape,
+                                   np.append(colors[body.index], 255)) for body in scene.bodies]
+        self.moving = [b.index for b in scene.bodies if b.motion != STATIC]
+        self.markers: dict[bytes, list] = {}
+
+    def marker(self, shape, rgba: np.ndarray) -> list:
+        """A goal marker's archetypes in its own frame, built once per shape and colour
+        (markers arrive as new objects with every file; Push's disc, a 48-gon mesh, takes
+        ~1 ms to build)."""
+        key = pickle.dumps((shape, rgba))
+        if key not in self.markers:
+            if len(self.markers) >= MARKER_CACHE:  # shapes that change every episode
+                self.markers.clear()
+            self.markers[key] = _geometry(shape, Pose(), rgba)
+        return self.markers[key]
+
+
+class _File:
+    """One ``.rrd`` file: the scene is logged on creation; rows are sent as columns."""
+
+    def __init__(self, path: Path, recording_id: str, layout: _Layout, statics: dict,
+                 contacts: bool):
+        self.layout = layout
+        self.stream = rr.RecordingStream(layout.application_id, recording_id=recording_id)
+        self.stream.save(path)  # a file sink: before any logging
+        # the blueprint as its .rbl file's contents (rerun's own importer reads them)
+        self.stream.log_file_from_contents(file_path="blueprint.rbl",
+                                           file_contents=layout.blueprint)
+        self.stream.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        for body, (entity, archetypes) in enumerate(zip(layout.entities, layout.geometry)):
+            if body in statics:
+                self.stream.log(entity, _transform(*statics[body]), static=True)
+            self.stream.log(entity, *archetypes, static=True)
+        if contacts:
+            self.stream.log("world/contacts/points",
+                            rr.Points3D.from_fields(radii=[0.004], colors=[CONTACT_COLOR]),
+                            static=True)
+            self.stream.log("world/contacts/forces",
+                            rr.Arrows3D.from_fields(radii=[0.002], colors=[FORCE_COLOR]),
+                            static=True)
+
+    def markers(self, markers: list) -> None:
+        """Static goal markers: (shape, Pose, RGBA uint8 (4,)) each, as a pose and the
+        shape's geometry in the marker's frame."""
+        for k, (shape, pose, rgba) in enumerate(markers):
+            self.stream.log(f"world/goals/{k}", _transform(pose.position, pose.orientation),
+                            *self.layout.marker(shape, rgba), static=True)
+
+    def action_names(self, names: list) -> None:
+        """Name the series of ``/action`` (one name per action entry)."""
+        self.stream.log("action", rr.SeriesLines(names=list(names)), static=True)
+
+    def states(self, steps, times, position, orientation) -> None:
+        """The moving bodies' poses: position (T, m, 3) m, orientation (T, m, 4) (w, x, y, z),
+        m = the scene's non-static bodies in order."""
+        indexes = _indexes(steps, times)
+        xyzw = _xyzw(orientation)
+        for k, body in enumerate(self.layout.moving):
+            self.stream.send_columns(self.layout.entities[body], indexes=indexes,
+                                     columns=rr.Transform3D.columns(translation=position[:, k],
+                                                                    quaternion=xyzw[:, k]))
+
+    def scalars(self, steps, times, reward, action, success) -> None:
+        """reward (T,), action (T, a), success (T,) 0 or 1."""
+        indexes = _indexes(steps, times)
+        self.stream.send_columns("reward", indexes=indexes,
+                                 columns=rr.Scalars.columns(scalars=reward))
+        self.stream.send_columns("success", indexes=indexes,
+                                 columns=rr.Scalars.columns(scalars=success))
+        self.stream.send_columns("action", indexes=indexes, columns=rr.Scalars.columns(
+            scalars=action.ravel()).partition(lengths=np.full(len(action), action.shape[1])))
+
+    def contacts(self, steps, times, points, origins, vectors) -> None:
+        """Per row: contact points (k, 3) m, force arrows' origins and vectors (p, 3) m."""
+        indexes = _indexes(steps, times)
+        points_column = rr.Points3D.columns(positions=np.concatenate(points))
+        arrows_column = rr.Arrows3D.columns(origins=np.concatenate(origins),
+                                            vectors=np.concatenate(vectors))
+        self.stream.send_columns("world/contacts/points", indexes=indexes,
+                                 columns=points_column.partition(lengths=[len(p) for p in points]))
+        self.stream.send_columns("world/contacts/forces", indexes=indexes,
+                                 columns=arrows_column.partition(lengths=[len(o) for o in origins]))
+
+    def close(self) -> None:
+        """Complete the file (rerun writes its footer)."""
+        self.stream.disconnect()
+
+
+def _indexes(steps, times) -> list:
+    """The ``step`` (sequence) and ``sim_time`` (duration; times in s) time columns."""
+    nanoseconds = np.round(np.asarray(times) * 1e9).astype(np.int64)  # not truncated
+    return [rr.TimeColumn("step", sequence=np.asarray(steps, dtype=np.int64)),
+            rr.TimeColumn("sim_time", duration=nanoseconds.astype("timedelta64[ns]"))]
+
+
+# -- geometry and layout ------------------------------------------------------------------------
+
+def _geometry(shape, pose: Pose, rgba: np.ndarray) -> list:
+    """The archetypes that draw ``shape`` placed at ``pose`` in an entity's frame, in colour
+    ``rgba`` (4,) uint8, to be logged as one static row: a Compound's parts are flattened,
+    and primitives of a kind share one archetype (its instances placed by their poses)."""
+    leaves = _primitives(shape, pose)
+    archetypes = []
+    for kind, build in _ARCHETYPES:
+        parts = [(s, p) for s, p in leaves if isinstance(s, kind)]
+        if parts:
+            archetypes.append(build(parts, rgba))
+    return archetypes
+
+
+def _primitives(shape, pose: Pose) -> list:
+    """(shape, Pose) of every primitive of ``shape`` placed at ``pose`` (Compounds flattened,
+    their part poses composed with ``pose``)."""
+    if not isinstance(shape, Compound):
+        return [(shape, pose)]
+    return [leaf for part, part_pose in shape.parts
+            for leaf in _primitives(part, Pose(pose.apply(part_pose.position),
+                                               quat.multiply(pose.orientation,
+                                                             part_pose.orientation)))]
+
+
+def _boxes(parts: list, rgba: np.ndarray) -> rr.Boxes3D:
+    """One box instance per (Box, Pose) in ``parts``, all in colour ``rgba`` (4,) uint8."""
+    return rr.Boxes3D(half_sizes=[s.half_extents for s, _ in parts],
+                      centers=[p.position for _, p in parts],
+                      quaternions=[_xyzw(p.orientation) for _, p in parts], colors=[rgba],
+                      fill_mode=rr.components.FillMode.Solid)
+
+
+def _spheres(parts: list, rgba: np.ndarray) -> rr.Ellipsoids3D:
+    """One ellipsoid instance per (Sphere, Pose) in ``parts`` (a sphere needs no turn)."""
+    return rr.Ellipsoids3D(half_sizes=[[s.radius] * 3 for s, _ in parts],
+                           centers=[p.position for _, p in parts], colors=[rgba],
+                           fill_mode=rr.components.FillMode.Solid)
+
+
+def _capsules(parts: list, rgba: np.ndarray) -> rr.Capsules3D:
+    """One capsule instance per (Capsule, Pose) in ``parts``. Ours are centred on their
+    origin; rerun's run from theirs along +z, so each starts at -half_length."""
+    return rr.Capsules3D(lengths=[2.0 * s.half_length for s, _ in parts],
+                         radii=[s.radius for s, _ in parts],
+                         translations=[p.apply([0.0, 0.0, -s.half_length]) for s, p in parts],
+                         quaternions=[_xyzw(p.orientation) for _, p in parts], colors=[rgba],
+                         fill_mode=rr.components.FillMode.Solid)
+
+
+def _meshes(parts: list, rgba: np.ndarray) -> rr.Mesh3D:
+    """Meshes as triangle soups with crease-aware normals (as the renderer shades them),
+    Planes as a square of PLANE_HALF_SIZE (two triangles) facing +z; all in one Mesh3D."""
+    positions, normals, triangles, count = [], [], [], 0
+    for shape, pose in parts:
+        if isinstance(shape, Plane):
+            h = PLANE_HALF_SIZE
+            corners = np.array([[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]])
+            faces = np.array([[0, 1, 2], [0, 2, 3]])
+            normal = np.tile([0.0, 0.0, 1.0], (4, 1))
+        else:
+            vertices, mesh_triangles = tessellate(shape)
+            corners = vertices[mesh_triangles].reshape(-1, 3)
+            faces = np.arange(len(corners)).reshape(-1, 3)
+            normal = _corner_normals(vertices, mesh_triangles)
+        positions.append(pose.apply(corners))
+        normals.append(normal @ pose.rotation().T)
+        triangles.append(faces + count)
+        count += len(corners)
+    return rr.Mesh3D(vertex_positions=np.concatenate(positions),
+                     vertex_normals=np.concatenate(normals),
+                     triangle_indices=np.concatenate(triangles), albedo_factor=rgba)
+
+
+_ARCHETYPES = ((Box, _boxes), (Sphere, _spheres), (Capsule, _capsules), ((Mesh, Plane), _meshes))
+"""(kind of primitive, the function that builds their archetype)."""
+
+
+def _transform(position, orientation) -> rr.Transform3D:
+    """position (3,) m, orientation (4,) (w, x, y, z)."""
+    return rr.Transform3D(translation=position,
+                          quaternion=rr.Quaternion(xyzw=_xyzw(orientation)))
+
+
+def _xyzw(q) -> np.ndarray:
+    """Quaternion(s) (..., 4) (w, x, y, z) -> rerun's (x, y, z, w)."""
+    return np.asarray(q)[..., [1, 2, 3, 0]]
+
+
+@functools.lru_cache(maxsize=32)
+def _blueprint_file(application_id: str, eye: tuple | None, target: tuple | None,
+                    scalars: bool, grid: bool) -> bytes:
+    """``_blueprint(eye, target, scalars, grid)`` saved for ``application_id`` as an ``.rbl``
+    file's bytes; built once per layout (it takes ~25 ms)."""
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "blueprint.rbl"
+        _blueprint(eye, target, scalars, grid).save(application_id, path)
+        return path.read_bytes()
+
+
+def _blueprint(eye, target, scalars: bool, grid: bool) -> rrb.Blueprint:
+    """The 3D view (from ``eye`` (3,) m towards ``target`` (3,) m if given; rerun's line grid
+    at z = 0 only if ``grid``: a table would hide it), beside plots of the reward, the action
+    and success when ``scalars``; playing on ``sim_time``."""
+    controls = None if eye is None else rrb.EyeControls3D(position=eye, look_target=target)
+    view = rrb.Spatial3DView(origin="/world", name="scene", eye_controls=controls,
+                             line_grid=grid)
+    if scalars:
+        plots = rrb.Vertical(*(rrb.TimeSeriesView(origin=f"/{name}", name=name)
+                               for name in ("reward", "action", "success")))
+        view = rrb.Horizontal(view, plots, column_shares=[3, 1])
+    return rrb.Blueprint(view, rrb.BlueprintPanel(state="collapsed"),
+                         rrb.SelectionPanel(state="collapsed"),
+                         rrb.TimePanel(timeline="sim_time", play_state="playing"))
+
+
+if __name__ == "__main__":
+    main()
