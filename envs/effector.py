@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigid_gym.kernels.footprint import lowest_centre
+from rigid_gym.kernels.footprint import lowest_centre, lowest_centres
 from rigid_gym.shapes import Box
 
 STEP_DISTANCE = 0.05
@@ -82,13 +82,18 @@ class SuctionGripper:
         target[2] = max(target[2], min(self.position[2], self._lowest_centre(target)))
         velocity = (target - self.position) / self.step_time
         self.world.set_velocity(self.body, velocity=velocity)  # it never turns: omega stays 0
+        self._grip(grip)
+
+    # -- helpers -------------------------------------------------------------------------------
+
+    def _grip(self, grip: float | None) -> None:
+        """After the pad's velocity is set: ``grip`` > 0 closes the suction, <= 0 opens it,
+        None leaves it."""
         if grip is not None and grip > 0.0 and self.held is None:
             self._try_grip()
         elif grip is not None and grip <= 0.0 and self.held is not None:
             self.world.detach(self.objects[self.held])  # leaves with the pad's new velocity
             self.held = None
-
-    # -- helpers -------------------------------------------------------------------------------
 
     def _try_grip(self) -> None:
         contacts = self.world.contacts(margin=GRIP_MARGIN)
@@ -120,3 +125,28 @@ class SuctionGripper:
         return lowest_centre(float(target[2]), float(shift[2]), parts[0], parts[1], parts[2],
                              count, positions[self.objects], rotations[self.objects],
                              self.half_extents, -1 if self.held is None else self.held)
+
+
+def command_all(world, grippers: list[SuctionGripper], motions: np.ndarray,
+                grips: np.ndarray | None) -> None:
+    """``SuctionGripper.command`` for gripper i of world i of a batched ``world``, for all of
+    them at once (the same arithmetic, so each world moves exactly as a single env's would):
+    motions (B, 3) in [-1, 1], grips (B,) or None (tasks without a grip). The grippers drive
+    the same body and boxes in every world (a vector env's copies), and share a workspace."""
+    first = grippers[0]
+    body, low, high = first.body, first.workspace.low, first.workspace.high
+    s = world.state
+    position = s.position[:, body]
+    target = np.clip(position + STEP_DISTANCE * motions, low, high)
+    held = np.array([-1 if g.held is None else g.held for g in grippers], dtype=np.int64)
+    objects = np.asarray(first.objects, dtype=np.int64)
+    lowest = np.empty(len(grippers))
+    lowest_centres(target, s.position, s.rotation, body, np.array(PAD_HALF_EXTENTS), objects,
+                   first.half_extents, held, np.empty((2, 3)), np.empty((2, 3, 3)),
+                   np.empty((2, 3)), np.empty((len(objects), 3)),
+                   np.empty((len(objects), 3, 3)), lowest)
+    target[:, 2] = np.maximum(target[:, 2], np.minimum(position[:, 2], lowest))
+    s.velocity[:, body] = (target - position) / first.step_time  # it never turns
+    if grips is not None:
+        for gripper, grip in zip(grippers, grips):
+            gripper._grip(grip)

@@ -21,6 +21,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from rigid_gym.envs.base import SOLVER_STEPS, STEP_TIME, RigidGymEnv, observe
+from rigid_gym.envs.effector import command_all
 from rigid_gym.envs.push import PushEnv
 from rigid_gym.envs.stack import StackEnv
 from rigid_gym.envs.throw import ThrowEnv
@@ -96,9 +97,8 @@ class RigidGymVectorEnv(VectorEnv):
             raise ValueError(f"{type(self).__name__}.step: actions must be finite (NaN and inf "
                              f"are refused); copies {bad} are not")
         actions = np.clip(actions, -1.0, 1.0)  # as the single env: outside [-1, 1] is clipped
-        grip = self.envs[0].has_grip
-        for env, action in zip(self.envs, actions):
-            env.gripper.command(action[:3], action[3] if grip else None)
+        grips = actions[:, 3] if self.envs[0].has_grip else None
+        command_all(self.world, [env.gripper for env in self.envs], actions[:, :3], grips)
         self.world.step(SOLVER_STEPS)  # every copy in one kernel call, held objects carried in it
         self.elapsed += 1
         observations, rewards, terminated, successes = self._outcomes()

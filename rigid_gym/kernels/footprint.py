@@ -88,3 +88,37 @@ def lowest_centre(target_z, drop, parts_x, parts_r, parts_half, parts, boxes_x, 
                     parts_x[p], parts_r[p], parts_half[p], boxes_x[k], boxes_r[k], boxes_half[k]):
                 lowest = max(lowest, top + height)
     return lowest
+
+
+@kernel
+def lowest_centres(targets, positions, rotations, pad, pad_half, objects, halves, held,
+                   parts_x, parts_r, parts_half, boxes_x, boxes_r, out):
+    """``lowest_centre`` for the gripper of every world at once: targets (B, 3) m, the pad's
+    centre at its target; positions (B, n, 3) m, rotations (B, n, 3, 3) of every body; pad:
+    the pad's body index, pad_half (3,) m; objects (K,) int64 the boxes' body indices and
+    halves (K, 3) m their half extents (the same in every world); held (B,) int64 the held
+    box (an index into objects, -1: none). Work arrays: parts_x (2, 3), parts_r (2, 3, 3),
+    parts_half (2, 3), boxes_x (K, 3), boxes_r (K, 3, 3). out (B,) m, written."""
+    for w in range(targets.shape[0]):
+        for c in range(3):
+            parts_x[0, c] = targets[w, c]
+            parts_half[0, c] = pad_half[c]
+            for d in range(3):
+                parts_r[0, c, d] = rotations[w, pad, c, d]
+        count = 1
+        h = held[w]
+        if h >= 0:
+            body = objects[h]
+            for c in range(3):
+                parts_x[1, c] = positions[w, body, c] + (targets[w, c] - positions[w, pad, c])
+                parts_half[1, c] = halves[h, c]
+                for d in range(3):
+                    parts_r[1, c, d] = rotations[w, body, c, d]
+            count = 2
+        for k in range(objects.shape[0]):
+            for c in range(3):
+                boxes_x[k, c] = positions[w, objects[k], c]
+                for d in range(3):
+                    boxes_r[k, c, d] = rotations[w, objects[k], c, d]
+        out[w] = lowest_centre(targets[w, 2], targets[w, 2] - positions[w, pad, 2], parts_x,
+                               parts_r, parts_half, count, boxes_x, boxes_r, halves, h)
