@@ -321,8 +321,8 @@ class _Recording:
         atexit.register(self.close)
 
     def send(self, kind: str, *values) -> None:
-        """Hand static content to the writer (``recording_writer``'s "markers" and
-        "action_names")."""
+        """Hand the writer a message about this file: one of ``recording_writer``'s kinds
+        ("markers", "action_names", "states", ...) and its values."""
         self.files.send(kind, self.path, *values)
 
     def record_state(self, step: int) -> None:
