@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigid_gym.kernels.footprint import lowest_centre, lowest_centres
+from rigid_gym.kernels.footprint import lowest_centres
 from rigid_gym.shapes import Box
 
 STEP_DISTANCE = 0.05
@@ -63,9 +63,10 @@ class SuctionGripper:
         self.step_time = step_time
         self.workspace = workspace
         self.held: int | None = None  # index into self.objects
-        # the pad and the held object at the target: centres, rotations, half extents
-        self._parts = (np.zeros((2, 3)), np.zeros((2, 3, 3)),
-                       np.array([PAD_HALF_EXTENTS, PAD_HALF_EXTENTS], dtype=np.float64))
+        k = len(self.objects)
+        # lowest_centres' work arrays: the pad and the held object, the objects
+        self._work = (np.empty((2, 3)), np.empty((2, 3, 3)), np.empty((2, 3)), np.empty((k, 3)),
+                      np.empty((k, 3, 3)))
 
     @property
     def position(self) -> np.ndarray:
@@ -108,23 +109,11 @@ class SuctionGripper:
     def _lowest_centre(self, target: np.ndarray) -> float:
         """The lowest z the gripper's centre may take at ``target``'s x, y: where it, or the
         object it holds, would rest on the table or on the top of a free object under it
-        (``kernels/footprint.lowest_centre``)."""
-        w = self.world
-        shift = target - self.position
-        parts = self._parts
-        parts[0][0] = target
-        parts[1][0] = w.rotation[self.body]
-        count = 1
-        if self.held is not None:
-            body = self.objects[self.held]
-            parts[0][1] = w.position[body] + shift
-            parts[1][1] = w.rotation[body]
-            parts[2][1] = self.half_extents[self.held]
-            count = 2
-        positions, rotations = w.position, w.rotation
-        return lowest_centre(float(target[2]), float(shift[2]), parts[0], parts[1], parts[2],
-                             count, positions[self.objects], rotations[self.objects],
-                             self.half_extents, -1 if self.held is None else self.held)
+        (``kernels/footprint.lowest_centre``; one world of ``_lowest_centres``)."""
+        lowest = np.empty(1)
+        _lowest_centres([self], target[None], self.world.position[None],
+                        self.world.rotation[None], lowest)
+        return float(lowest[0])
 
 
 def command_all(world, grippers: list[SuctionGripper], motions: np.ndarray,
@@ -138,15 +127,22 @@ def command_all(world, grippers: list[SuctionGripper], motions: np.ndarray,
     s = world.state
     position = s.position[:, body]
     target = np.clip(position + STEP_DISTANCE * motions, low, high)
-    held = np.array([-1 if g.held is None else g.held for g in grippers], dtype=np.int64)
-    objects = np.asarray(first.objects, dtype=np.int64)
     lowest = np.empty(len(grippers))
-    lowest_centres(target, s.position, s.rotation, body, np.array(PAD_HALF_EXTENTS), objects,
-                   first.half_extents, held, np.empty((2, 3)), np.empty((2, 3, 3)),
-                   np.empty((2, 3)), np.empty((len(objects), 3)),
-                   np.empty((len(objects), 3, 3)), lowest)
+    _lowest_centres(grippers, target, s.position, s.rotation, lowest)
     target[:, 2] = np.maximum(target[:, 2], np.minimum(position[:, 2], lowest))
     s.velocity[:, body] = (target - position) / first.step_time  # it never turns
     if grips is not None:
         for gripper, grip in zip(grippers, grips):
             gripper._grip(grip)
+
+
+def _lowest_centres(grippers: list[SuctionGripper], targets: np.ndarray, positions: np.ndarray,
+                    rotations: np.ndarray, out: np.ndarray) -> None:
+    """``SuctionGripper._lowest_centre`` of gripper i at targets[i] (B, 3) m in world i of
+    positions (B, n, 3) and rotations (B, n, 3, 3), into out (B,) m; the grippers drive the
+    same body and objects (``kernels/footprint.lowest_centres``)."""
+    first = grippers[0]
+    held = np.array([-1 if g.held is None else g.held for g in grippers], dtype=np.int64)
+    lowest_centres(targets, positions, rotations, first.body, np.array(PAD_HALF_EXTENTS),
+                   np.asarray(first.objects, dtype=np.int64), first.half_extents, held,
+                   *first._work, out)

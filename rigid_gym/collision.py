@@ -93,10 +93,10 @@ class Collider:
         part = type(state)(*(a[worlds] for a in state))
         while True:
             find_pairs(part.position, part.rotation, part.velocity, part.angular_velocity,
-                  self.motion, self.geometry, margin, dt, acceleration, self.sweep,
-                  self.bounds[worlds], self.order[worlds], self.pair_a[worlds],
-                  self.pair_b[worlds], self.pair_count[worlds], self.keys[worlds],
-                  self.tmp[worlds])
+                       self.motion, self.geometry, margin, dt, acceleration, self.sweep,
+                       self.bounds[worlds], self.order[worlds], self.pair_a[worlds],
+                       self.pair_b[worlds], self.pair_count[worlds], self.keys[worlds],
+                       self.tmp[worlds])
             if int(self.pair_count[worlds].max(initial=0)) <= self.pair_a.shape[1]:
                 return
             self.grow_pairs()
@@ -110,9 +110,9 @@ class Collider:
         part = type(state)(*(a[worlds] for a in state))
         while True:
             detect_contacts(part.position, part.rotation, self.geometry, self.pair_a[worlds],
-                   self.pair_b[worlds], self.pair_count[worlds], margin, self.body_a[worlds],
-                   self.body_b[worlds], self.point[worlds], self.normal[worlds],
-                   self.depth[worlds], self.contact_count[worlds])
+                            self.pair_b[worlds], self.pair_count[worlds], margin,
+                            self.body_a[worlds], self.body_b[worlds], self.point[worlds],
+                            self.normal[worlds], self.depth[worlds], self.contact_count[worlds])
             needed = int(self.contact_count[worlds].max(initial=0))
             if needed <= self.depth.shape[1]:
                 return

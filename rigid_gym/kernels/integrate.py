@@ -80,8 +80,6 @@ def update_world_velocities(
         angular_velocity[w, i, 2] = oz
 
 
-
-
 @kernel
 def effective_angular_velocity(rotation, inverse_moments, lx, ly, lz, tx, ty, tz, h, order):
     """omega_bar for one (sub)step of length h: Buss's update of the given order (1, 2 or 3).
@@ -155,8 +153,6 @@ def update_world_positions(
         angular_velocity[w, i, 0] = ox
         angular_velocity[w, i, 1] = oy
         angular_velocity[w, i, 2] = oz
-
-
 
 
 @kernel

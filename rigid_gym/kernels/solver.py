@@ -399,8 +399,6 @@ def resolve_world_contacts(state, model, geo, w, pair_a, pair_b, pairs, accumula
             break
 
 
-
-
 Graph = namedtuple("Graph", "touching edge_from edge_to edge_start targets component "
                             "component_level by_component index low on_stack stack calls "
                             "next_edge level by_level counts body_pair_start body_pairs")
