@@ -181,7 +181,8 @@ def evaluate(args) -> int:
 
 
 def replay(files: list[str]) -> int:
-    """Open ``files`` in the rerun viewer; returns its exit status."""
+    """Open ``files`` in the rerun viewer, with the layout (blueprint file) beside each;
+    returns the viewer's exit status."""
     missing = [f for f in files if not Path(f).is_file()]
     if missing:
         print(f"rigid-gym replay: no such file: {', '.join(missing)}", file=sys.stderr)
@@ -191,7 +192,10 @@ def replay(files: list[str]) -> int:
         print(f"rigid-gym replay: the rerun viewer was not found next to {sys.executable} or on "
               "PATH; it comes with pip install 'rerun-sdk==0.41.*'", file=sys.stderr)
         return 1
-    return subprocess.call([viewer, *files])
+    from rigid_gym.recording import blueprint_of
+
+    layouts = {str(b): None for b in map(blueprint_of, files) if b is not None}  # in order, once
+    return subprocess.call([viewer, *files, *(b for b in layouts if b not in files)])
 
 
 def find_rerun() -> str | None:

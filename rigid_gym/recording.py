@@ -1,4 +1,4 @@
-"""Episode recordings: any env or World to a rerun ``.rrd`` file, replayed with ``rerun FILE``.
+"""Episode recordings: any env or World to a rerun ``.rrd`` file, replayed in rerun's viewer.
 
     env = RecordRerun(gym.make("rigid_gym/Push-v0"))  # to recordings/rigid_gym-Push-v0/
     with WorldRecorder(world, "fall.rrd") as recorder:  # any World
@@ -7,8 +7,15 @@
             world.step()
             recorder.record()
 
-Replay with ``rigid-gym replay FILE`` (or ``rerun FILE``: the viewer the rerun-sdk wheel
-installs, which must be the SDK's version).
+Replay with ``rigid-gym replay FILE``, which opens the file with its layout: the blueprint
+file beside it, ``<application id>.rbl`` (``blueprint_of``; by hand, ``rerun FILE LAYOUT.rbl``
+or ``rerun FOLDER/*``, with the viewer the rerun-sdk wheel installs, which must be the SDK's
+version; ``rerun FILE`` alone shows the data in rerun's own default layout).
+
+**The layout** (``<folder>/<application id>.rbl``, written once per folder): the 3D view (for
+an env, from its camera, beside plots of the reward, the action and success), playing on
+``sim_time``. The application id is the env id (``rigid_gym-Push-v0``), or a World
+recorder's ``application_id``.
 
 **What a file holds** (entity paths; frames are right-handed, z up):
 
@@ -32,21 +39,20 @@ Timelines: ``step`` (sequence: env steps, 0 = the state after ``reset``; for a W
 every step from 0; rewards, actions and successes at steps 1, 2, ... (the step they led to).
 Rerun stores translations and quaternions as float32 and scalars as float64.
 
-**Cost.** A rerun file costs ~7 ms of the calling thread and ~10 ms of CPU in all to make,
-however short the episode (stream, file sink, blueprint, scene, columns, closing, rerun's own
-threads): as long as a 50-step episode of the fastest task. The recorders therefore only
-buffer rows in numpy (~8 us per step) and hand each file's rows to a writer process
-(``rigid_gym.recording_writer``, one per recording process, started at its first file), which
-does all the rerun work at a lower priority while the env goes on: ~1 ms per file in the
-env's process, the rest on another core when there is one (``benchmarks/recording.py``).
-Rows are handed over at the end of an episode, or every ``chunk_steps`` steps, bounding
-memory.
+**Cost.** Making a rerun file costs ~2 ms of CPU however short the episode (a quarter of a
+50-step episode of the fastest task), so the recorders only buffer rows in numpy (~3 us per
+step) and hand each file's rows to a writer process (``rigid_gym.recording_writer``, one per
+recording process, started at its first file), which does all the rerun work at a lower
+priority while the env goes on: ~0.5 ms per file in the env's process, the rest on another
+core when there is one (``benchmarks/recording.py``). Rows are handed over at the end of an
+episode, or every ``chunk_steps`` steps, bounding the env process's memory; the writer holds a
+file's rows (~30 bytes per moving body and step) until the file ends.
 
 **Files are complete** once the writer has written what it was handed: at the latest when
 ``close()`` returns, when ``step`` or ``reset`` raises (what was buffered is written, then the
 exception propagates), and when the process exits (an ``atexit`` hook hands over any open
 file and waits for the writer); a process killed outright loses only the rows it had not
-handed over. Files of finished episodes are written in the background: ``sync()`` waits for
+handed over (a writer killed outright loses the files it had not finished). Files of finished episodes are written in the background: ``sync()`` waits for
 them. Nothing is made until an episode starts, so the wrappers can be built inside
 SubprocVecEnv workers (each worker has its own writer and files; the default run name contains
 the process id). ``RERUN=off`` in the environment turns recording off: nothing is written and
@@ -63,10 +69,11 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from rerun.chunk import RrdReader
 
 from rigid_gym.envs.base import RigidGymEnv
 from rigid_gym.kernels.integrate import STATIC
-from rigid_gym.recording_writer import Writer, writer
+from rigid_gym.recording_writer import Writer, blueprint_path, writer
 from rigid_gym.render import MARKER_COLOR
 from rigid_gym.shapes import Plane, Pose
 
@@ -157,7 +164,8 @@ class RecordRerun(gym.Wrapper):
         task = self.env.unwrapped
         name = f"{self.run}-episode-{self.episode_id}"
         path = self.folder / f"{name}.rrd"
-        recording = _open(path, name, task.world, 0, self.options, self._scene_layout)
+        recording = _open(path, name, task.world, 0, self.options, self._scene_layout,
+                          self.action_space.shape[0])
         if recording is None:
             return
         self._recording, self._step = recording, 0
@@ -167,7 +175,7 @@ class RecordRerun(gym.Wrapper):
             task._add_markers(markers)
             recording.send("markers", markers.shapes)
             recording.send("action_names", ACTION_NAMES[:self.action_space.shape[0]])
-            recording.record_state(0)
+            recording.record(0)
         except BaseException:
             self._end_episode(wait=True)
             raise
@@ -183,16 +191,29 @@ class RecordRerun(gym.Wrapper):
         return self._layout[1]
 
     def _record_step(self, action, reward, info) -> None:
-        self._recording.record_state(self._step)
-        self._recording.record_scalars(self._step, float(reward),
-                                       np.array(action, dtype=np.float64).ravel(),
-                                       float(bool(info.get("is_success", False))))
+        self._recording.record(self._step, reward, np.ravel(action),
+                               bool(info.get("is_success", False)))
 
     def _end_episode(self, wait: bool = False) -> None:
         """Hand the episode's file over to the writer; ``wait`` until it is written."""
         recording, self._recording = self._recording, None
         if recording is not None:
             recording.close(wait)
+
+
+def blueprint_of(path: str | os.PathLike) -> Path | None:
+    """The layout of the recording ``path``: the blueprint file beside it
+    (``<application id>.rbl`` in its folder), or None if there is none or ``path`` is not a
+    readable rerun file."""
+    try:
+        recordings = RrdReader(path).recordings()
+    except (OSError, RuntimeError, ValueError):
+        return None
+    for recording in recordings:
+        blueprint = blueprint_path(Path(path).parent, recording.application_id)
+        if blueprint.is_file():
+            return blueprint
+    return None
 
 
 def cubic_schedule(episode: int) -> bool:
@@ -244,7 +265,7 @@ class WorldRecorder:
                                     self.options, self._layout)
             self._state = "off" if self._recording is None else "open"
         if self._recording is not None:
-            self._recording.record_state(self.world.steps)
+            self._recording.record(self.world.steps)
 
     def _layout(self, files: Writer) -> int:
         grid = not any(isinstance(b.shape, Plane) for b in self.world.scene.bodies)
@@ -287,35 +308,40 @@ class _Options:
         self.chunk_steps = int(chunk_steps)
 
 
-def _open(path: Path, recording_id: str, world, index: int, options: _Options,
-          layout) -> _Recording | None:
+def _open(path: Path, recording_id: str, world, index: int, options: _Options, layout,
+          actions: int = 0) -> _Recording | None:
     """A new recording of world ``index`` of ``world`` to ``path``, or None when rerun is off
     (``RERUN=off``, ``0`` or ``false``, which rerun documents). ``layout``: a function of the
-    writer that gives the key of the scene's layout there."""
+    writer that gives the key of the scene's layout there; ``actions``: an env's action size
+    (0: no scalars)."""
     if os.environ.get("RERUN", "").strip().lower() in ("0", "off", "false"):
         return None
-    path.parent.mkdir(parents=True, exist_ok=True)  # here, so that a bad folder fails here
+    if not path.parent.is_dir():  # one stat; mkdir(exist_ok=True) takes ~25 us a file
+        path.parent.mkdir(parents=True, exist_ok=True)  # here, so that a bad folder fails here
     files = writer()
-    return _Recording(files, path, recording_id, layout(files), world, index, options)
+    return _Recording(files, path, recording_id, layout(files), world, index, options, actions)
 
 
 class _Recording:
     """One file of one world of ``world`` (index ``index``): opened in the writer on
-    creation; ``record_*`` buffer rows, which ``flush`` hands to the writer; ``close``
-    completes the file."""
+    creation; ``record`` buffers rows, which ``flush`` hands to the writer; ``close``
+    completes the file. Small values go to the writer as plain tuples, rows as a few arrays
+    per kind: pickling a numpy array costs ~5 us however small it is. ``actions``: an env's
+    action size, whose rows also hold the reward, action and success (0: a World's)."""
 
     def __init__(self, files: Writer, path: Path, recording_id: str, layout: int, world,
-                 index: int, options: _Options):
+                 index: int, options: _Options, actions: int = 0):
         self.files, self.path = files, path
         self.world, self.index, self.options = world, index, options
         bodies = world.scene.bodies
         self.moving = np.array([b.index for b in bodies if b.motion != STATIC], dtype=np.intp)
-        statics = {b.index: (world.state.position[index, b.index].copy(),
-                             world.state.orientation[index, b.index].copy())
+        statics = {b.index: (tuple(world.state.position[index, b.index].tolist()),
+                             tuple(world.state.orientation[index, b.index].tolist()))
                    for b in bodies if b.motion == STATIC}
-        self.states = _Rows()
-        self.scalars = _Rows()
-        self.contacts = _Rows()
+        count = len(bodies)  # all bodies' poses are buffered, the moving ones sent
+        scalars = {"reward": (), "action": (actions,), "success": ()} if actions else {}
+        self.rows = _Rows(position=(count, 3), orientation=(count, 4), **scalars)
+        self.contacts: list[tuple] = []  # (step, time, points, origins, vectors): ragged rows
         self.closed = False
         files.send("open", path, recording_id, layout, statics, options.contacts)
         atexit.register(self.close)
@@ -325,24 +351,22 @@ class _Recording:
         ("markers", "action_names", "states", ...) and its values."""
         self.files.send(kind, self.path, *values)
 
-    def record_state(self, step: int) -> None:
-        """Buffer the moving bodies' poses (and contacts, if on) at ``step``."""
+    def record(self, step: int, reward: float = 0.0, action=None, success: bool = False) -> None:
+        """Buffer the bodies' poses (and contacts, if on) at ``step``; for an env after a step
+        (``step`` > 0), also its reward, action (a,) and success."""
         w, s = self.world, self.world.state
-        sim_time = w.time
-        self.states.append(step, sim_time,
-                           position=s.position[self.index].take(self.moving, axis=0),
-                           orientation=s.orientation[self.index].take(self.moving, axis=0))
+        if step and action is not None:
+            self.rows.append(step, w.time, position=s.position[self.index],
+                             orientation=s.orientation[self.index], reward=reward,
+                             action=action, success=success)
+        else:
+            self.rows.append(step, w.time, position=s.position[self.index],
+                             orientation=s.orientation[self.index])
         if self.options.contacts:
-            points, origins, vectors = _contacts(w, self.index, self.options.force_scale)
-            self.contacts.append(step, sim_time, points=points, origins=origins, vectors=vectors)
-        if len(self.states) >= self.options.chunk_steps:
+            self.contacts.append((step, w.time,
+                                  *_contacts(w, self.index, self.options.force_scale)))
+        if len(self.rows) >= self.options.chunk_steps:
             self.flush()
-
-    def record_scalars(self, step: int, reward: float, action: np.ndarray,
-                       success: float) -> None:
-        """Buffer an env step's reward, action (a,) (the caller's own copy) and success (0 or
-        1) at ``step``."""
-        self.scalars.append(step, self.world.time, reward=reward, action=action, success=success)
 
     def flush(self) -> None:
         """Hand every buffered row to the writer now, and empty the buffers."""
@@ -363,44 +387,64 @@ class _Recording:
             self.files.sync()
 
     def _send_rows(self) -> None:
-        if len(self.states):
-            steps, times, rows = self.states.take()
-            self.send("states", steps, times, np.stack(rows["position"]),
-                      np.stack(rows["orientation"]))
-        if len(self.scalars):
-            steps, times, rows = self.scalars.take()
-            self.send("scalars", steps, times, np.array(rows["reward"]),
-                      np.stack(rows["action"]), np.array(rows["success"]))
-        if len(self.contacts):
-            steps, times, rows = self.contacts.take()
-            self.send("contacts", steps, times, rows["points"], rows["origins"],
-                      rows["vectors"])
+        if len(self.rows):
+            steps, times, rows = self.rows.take()
+            self.send("states", steps, times, rows["position"][:, self.moving],
+                      rows["orientation"][:, self.moving])
+            scalars = slice(1 if steps[0] == 0 else 0, None)  # none at an env's reset
+            if "reward" in rows and len(steps[scalars]):
+                self.send("scalars", steps[scalars], times[scalars], rows["reward"][scalars],
+                          rows["action"][scalars], rows["success"][scalars])
+        if self.contacts:
+            steps, times, points, origins, vectors = zip(*self.contacts)
+            self.contacts = []
+            self.send("contacts", np.array(steps), np.array(times), points, origins, vectors)
 
 
 class _Rows:
-    """Rows buffered for columns: a step, a time (s) and named values per row."""
+    """Rows buffered for columns: a step, a time (s) and named float64 values of fixed
+    shapes per row, kept in arrays that grow as needed (no object per row)."""
 
-    def __init__(self):
-        self.steps: list[int] = []
-        self.times: list[float] = []
-        self.values: dict[str, list] = {}
+    def __init__(self, **shapes: tuple):
+        self.shapes = shapes
+        self._empty()
 
     def __len__(self) -> int:
-        return len(self.steps)
+        return self.count
 
     def append(self, step: int, sim_time: float, **values) -> None:
-        """Values: numbers, or arrays (which may differ in shape between rows) that are the
-        caller's own copies: they are kept, not copied again."""
-        self.steps.append(step)
-        self.times.append(sim_time)
+        """Add a row at ``step``, ``sim_time``, and copy ``values`` into it by name (those
+        not given are left undefined)."""
+        if self.count == len(self.steps):
+            self._grow(max(64, 2 * self.count))
+        k = self.count
+        self.steps[k], self.times[k] = step, sim_time
         for name, value in values.items():
-            self.values.setdefault(name, []).append(value)
+            self.values[name][k] = value
+        self.count += 1
 
     def take(self) -> tuple[np.ndarray, np.ndarray, dict]:
-        """(steps (T,), times (T,) s, {name: list of rows}), and empty the buffer."""
-        steps, times, rows = np.array(self.steps), np.array(self.times), self.values
-        self.steps, self.times, self.values = [], [], {}
-        return steps, times, rows
+        """(steps (T,), times (T,) s, {name: values (T, ...)}), and empty the buffer (the
+        arrays returned are not reused)."""
+        k = self.count
+        taken = self.steps[:k], self.times[:k], {n: v[:k] for n, v in self.values.items()}
+        self._empty()
+        return taken
+
+    def _empty(self) -> None:
+        self.count = 0
+        self.steps, self.times = np.empty(0, dtype=np.int64), np.empty(0)
+        self.values = {name: np.empty((0, *shape)) for name, shape in self.shapes.items()}
+
+    def _grow(self, rows: int) -> None:
+        """Room for ``rows`` rows, the current ones kept."""
+        def larger(values: np.ndarray) -> np.ndarray:
+            grown = np.empty((rows, *values.shape[1:]), dtype=values.dtype)
+            grown[:self.count] = values[:self.count]
+            return grown
+
+        self.steps, self.times = larger(self.steps), larger(self.times)
+        self.values = {name: larger(values) for name, values in self.values.items()}
 
 
 # -- helpers ------------------------------------------------------------------------------------
@@ -415,8 +459,10 @@ class _Markers:
                    orientation=(1.0, 0.0, 0.0, 0.0)) -> int:
         """As ``Renderer.add_marker``: the marker's shape, pose, colour (r, g, b) in [0, 1]
         and opacity in (0, 1]; returns its index."""
+        pose = Pose(position, orientation)  # checked
         rgba = np.round(255 * np.append(np.asarray(color, dtype=np.float64), alpha))
-        self.shapes.append((shape, Pose(position, orientation), rgba.astype(np.uint8)))
+        self.shapes.append((shape, tuple(pose.position.tolist()),
+                            tuple(pose.orientation.tolist()), tuple(rgba.astype(int).tolist())))
         return len(self.shapes) - 1
 
 

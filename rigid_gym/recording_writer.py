@@ -1,22 +1,29 @@
 """The process that writes the rerun files of ``rigid_gym.recording``, and its client.
 
-A rerun file costs ~7 ms to make however short the episode: a stream, a file sink, the
-blueprint, the scene, the columns, and closing (which waits for rerun's own threads). That is
-about as long as a 50-step episode of the fastest task. So the recorders only buffer an
-episode's rows in numpy (~10 us a step) and hand them to a writer process, which does all the
-rerun work while the env goes on: one writer per recording process, started at its first file
-(``writer()``), each file written in the order its messages were sent.
+Each file is one ``ChunkStore`` of rerun chunks, written in one go when the file is closed
+(``rerun.chunk.ChunkStore.write_rrd``). A 50-step episode's file costs the writer ~1.8 ms of
+CPU this way, against ~5 ms through a ``RecordingStream``, whose file sink and batcher start
+and join threads for every file; the chunks the scene's files share are built once. Its
+layout (blueprint) is a file beside it, ``<application id>.rbl`` in the same folder, written
+once: a rerun file holds one store, and a blueprint is a store of its own, which rerun binds
+to recordings by their application id (``rigid-gym replay FILE`` opens both; so does
+``rerun FOLDER/*``). The recorders only buffer an episode's rows in numpy and hand them to a
+writer process, which does all the rerun work while the env goes on: one writer per recording
+process, started at its first file (``writer()``), files written in the order their messages
+were sent.
 
-Messages are pickled tuples on the writer's standard input:
+Messages are tuples, handed over in pickled lists on the writer's standard input:
 
 - ``("layout", key, scene, application_id, blueprint)``: what files of ``scene`` share, built
   once (``_Layout``); blueprint: the ``_blueprint`` arguments (eye, target, scalars, grid).
 - ``("open", path, recording_id, key, statics, contacts)``: start a file; statics: {body
-  index: (position (3,) m, orientation (4,) w, x, y, z)} of the static bodies.
-- ``("markers", path, markers)``: goal markers, (shape, Pose, RGBA uint8 (4,)) each.
+  index: (position (3,) m, orientation (4,) w, x, y, z)} of the static bodies, as tuples.
+- ``("markers", path, markers)``: goal markers, (shape, position, orientation, RGBA) each
+  (``_File.markers``).
 - ``("action_names", path, names)``.
 - ``("states" | "scalars" | "contacts", path, steps (T,), times (T,) s, values)``: rows.
-- ``("close", path)``: complete the file.
+- ``("close", path)``: write the file (until then its chunks are held in memory: ~40 bytes
+  per moving body and row).
 - ``("sync",)``: answered on standard output once everything sent before it is written.
 - ``("stop",)``, or the end of the input (its client's process ended, however it ended):
   complete every open file and exit.
@@ -30,18 +37,23 @@ shared standard error; the client then raises at its next message.
 from __future__ import annotations
 
 import atexit
-import functools
 import os
 import pickle
 import signal
 import subprocess
 import sys
-import tempfile
+import time
 from pathlib import Path
+
+try:
+    import fcntl  # Unix only
+except ImportError:
+    fcntl = None
 
 import numpy as np
 import rerun as rr
 import rerun.blueprint as rrb
+from rerun.chunk import Chunk, ChunkStore
 
 from rigid_gym import quaternion as quat
 from rigid_gym.kernels.integrate import STATIC
@@ -51,13 +63,16 @@ from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
 
 SYNCED = b"rigid_gym.recording_writer: synced\n"
 """The writer's answer to a sync."""
+PIPE_BYTES = 1 << 20
+"""bytes the pipe to the writer holds (Linux's default is 64 KiB): ~70 files of 50-step
+episodes."""
 NICENESS = 10
 """The writer runs at a lower priority: where it competes with the env for a core, the env
 goes first, and the writer catches up while the env waits (on a full pipe, or a sync)."""
 PLANE_HALF_SIZE = 1.0
 """m: a Plane (the ground) is drawn as the square |x|, |y| <= this."""
-MARKER_CACHE = 64
-"""Marker geometries kept per layout (``_Layout.marker``)."""
+RECURRING_CACHE = 64
+"""Recurring static rows kept per layout (``_Layout.static``)."""
 CONTACT_COLOR = (230, 40, 40)
 FORCE_COLOR = (250, 150, 30)
 
@@ -71,7 +86,9 @@ class Writer:
         self.owner = os.getpid()
         self.process = subprocess.Popen([sys.executable, "-m", "rigid_gym.recording_writer"],
                                         stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+        _widen(self.process.stdin)
         self.layouts = 0
+        self.pending: list[tuple] = []
         self.stopped = False
         atexit.register(self.stop)
 
@@ -82,22 +99,21 @@ class Writer:
         return self.layouts
 
     def send(self, *message, flush: bool = False) -> None:
-        """Hand ``message`` to the writer. Messages wait in an 8 KiB buffer until ``flush``
-        (the end of a file or of a chunk of rows), so that the writer wakes once per file,
-        not once per message; a send waits only when the pipe is full (the writer is behind
-        by ~64 KiB)."""
-        try:
-            pickle.dump(message, self.process.stdin, protocol=pickle.HIGHEST_PROTOCOL)
-        except (BrokenPipeError, ValueError) as error:  # ValueError: the pipe was closed
-            raise RuntimeError(self._ended()) from error
+        """Hand ``message`` to the writer. Messages are held until ``flush`` (the end of a
+        file or of a chunk of rows) hands them over as one pickled list, so that the writer
+        wakes once per file, not once per message (a 50-step episode's are ~15 KiB)."""
+        self.pending.append(message)
         if flush:
             self.flush()
 
     def flush(self) -> None:
-        """Hand the buffered messages over now."""
+        """Hand the held messages over now; waits only while the pipe is full (the writer is
+        behind by ~64 KiB)."""
+        batch, self.pending = self.pending, []
         try:
+            self.process.stdin.write(pickle.dumps(batch, protocol=pickle.HIGHEST_PROTOCOL))
             self.process.stdin.flush()
-        except (BrokenPipeError, ValueError) as error:
+        except (BrokenPipeError, ValueError) as error:  # ValueError: the pipe was closed
             raise RuntimeError(self._ended()) from error
 
     def sync(self) -> None:
@@ -129,6 +145,15 @@ class Writer:
                 f"{self.process.poll()}); its error, if any, is above on standard error")
 
 
+def _widen(pipe) -> None:
+    """Let ``pipe`` hold ``PIPE_BYTES`` (where the system allows it): a writer held up for a
+    moment (another process took its core) then does not hold up the env at once."""
+    try:
+        fcntl.fcntl(pipe.fileno(), fcntl.F_SETPIPE_SZ, PIPE_BYTES)
+    except (AttributeError, OSError):  # not Linux, or above /proc/sys/fs/pipe-max-size
+        pass  # the default size: the env waits sooner, nothing else changes
+
+
 _writer: Writer | None = None
 
 
@@ -153,15 +178,10 @@ def main() -> None:
     os.nice(NICENESS)
     answers = os.fdopen(os.dup(1), "wb")  # standard output is for answers only:
     os.dup2(2, 1)  # what anything else prints goes to standard error
-    source = sys.stdin.buffer
     layouts: dict[int, _Layout] = {}
     files: dict[Path, _File] = {}
     try:
-        while True:
-            try:
-                kind, *args = pickle.load(source)
-            except EOFError:
-                break
+        for kind, *args in _messages(sys.stdin.buffer):
             if kind == "stop":
                 break
             if kind == "sync":
@@ -169,8 +189,7 @@ def main() -> None:
                 answers.flush()
             elif kind == "layout":
                 key, scene, application_id, blueprint = args
-                layouts[key] = _Layout(scene, application_id, _blueprint_file(application_id,
-                                                                               *blueprint))
+                layouts[key] = _Layout(scene, application_id, blueprint)
             elif kind == "open":
                 path, recording_id, key, statics, contacts = args
                 files[path] = _File(path, recording_id, layouts[key], statics, contacts)
@@ -184,69 +203,99 @@ def main() -> None:
             file.close()
 
 
-class _Layout:
-    """What every file of one scene shares, built once (for each file, building them took
-    longer than writing an episode's data): every body's entity path and geometry as rerun
-    archetypes in its body frame, and the blueprint (the bytes of an ``.rbl`` file for
-    ``application_id``)."""
+def _messages(source):
+    """The messages of the pickled lists on ``source``, in order, until its end."""
+    while True:
+        try:
+            batch = pickle.load(source)
+        except EOFError:
+            return
+        yield from batch
 
-    def __init__(self, scene: Scene, application_id: str, blueprint: bytes):
+
+class _Layout:
+    """What every file of one scene shares, built once (for each file, building it took
+    longer than writing an episode's data): every body's entity path, the scene's static rows
+    (coordinates, each body's geometry in its body frame) as rerun chunks, a cache of rows
+    that recur in many files (``static``), and the blueprint, written beside the files
+    (``blueprint_beside``). A chunk may be written to any number of files: each file is a
+    store of its own."""
+
+    def __init__(self, scene: Scene, application_id: str, blueprint: tuple):
         self.application_id = application_id
         self.blueprint = blueprint
+        self.blueprint_folders: set[Path] = set()
         self.entities = [f"world/bodies/{rr.escape_entity_path_part(b.name)}"
                          for b in scene.bodies]
         colors = np.round(255 * _body_colors(scene, None)).astype(np.uint8)
-        self.geometry = [_geometry(body.shape, body.body_from_shape,
-                                   np.append(colors[body.index], 255)) for body in scene.bodies]
+        self.scene = [_static_chunk("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP)] + [
+            _static_chunk(self.entities[body.index],
+                          *_geometry(body.shape, body.body_from_shape,
+                                     np.append(colors[body.index], 255)))
+            for body in scene.bodies]
         self.moving = [b.index for b in scene.bodies if b.motion != STATIC]
-        self.markers: dict[bytes, list] = {}
+        self.recurring: dict[tuple, Chunk] = {}
 
-    def marker(self, shape, rgba: np.ndarray) -> list:
-        """A goal marker's archetypes in its own frame, built once per shape and colour
-        (markers arrive as new objects with every file; Push's disc, a 48-gon mesh, takes
-        ~1 ms to build)."""
-        key = pickle.dumps((shape, rgba))
-        if key not in self.markers:
-            if len(self.markers) >= MARKER_CACHE:  # shapes that change every episode
-                self.markers.clear()
-            self.markers[key] = _geometry(shape, Pose(), rgba)
-        return self.markers[key]
+    def static(self, entity: str, key, archetypes) -> Chunk:
+        """The static row of ``archetypes()`` at ``entity``, built once per ``key`` (a
+        hashable stand-in for its values): static bodies' poses, goal marker shapes (Push's
+        disc, a 48-gon mesh, takes ~1 ms to build), action names."""
+        if (entity, key) not in self.recurring:
+            if len(self.recurring) >= RECURRING_CACHE:  # values that change every episode
+                self.recurring.clear()
+            self.recurring[entity, key] = _static_chunk(entity, *archetypes())
+        return self.recurring[entity, key]
+
+    def blueprint_beside(self, path: Path) -> None:
+        """Write the blueprint to ``<application id>.rbl`` in ``path``'s folder, once per
+        folder (replacing one of an earlier run: rerun keeps one blueprint per application
+        id anyway)."""
+        folder = path.parent
+        if folder not in self.blueprint_folders:
+            _blueprint(*self.blueprint).save(self.application_id,
+                                             blueprint_path(folder, self.application_id))
+            self.blueprint_folders.add(folder)
+
+
+def blueprint_path(folder: Path, application_id: str) -> Path:
+    """Where the blueprint of ``application_id``'s files in ``folder`` is."""
+    return Path(folder) / f"{application_id}.rbl"
 
 
 class _File:
-    """One ``.rrd`` file: the scene is logged on creation; rows are sent as columns."""
+    """One ``.rrd`` file: chunks gathered from the messages (the scene's on creation),
+    written by ``close``."""
 
     def __init__(self, path: Path, recording_id: str, layout: _Layout, statics: dict,
                  contacts: bool):
-        self.layout = layout
-        self.stream = rr.RecordingStream(layout.application_id, recording_id=recording_id)
-        self.stream.save(path)  # a file sink: before any logging
-        # the blueprint as its .rbl file's contents (rerun's own importer reads them)
-        self.stream.log_file_from_contents(file_path="blueprint.rbl",
-                                           file_contents=layout.blueprint)
-        self.stream.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
-        for body, (entity, archetypes) in enumerate(zip(layout.entities, layout.geometry)):
-            if body in statics:
-                self.stream.log(entity, _transform(*statics[body]), static=True)
-            self.stream.log(entity, *archetypes, static=True)
+        self.path, self.recording_id, self.layout = path, recording_id, layout
+        layout.blueprint_beside(path)
+        self.chunks = [_static_chunk("__properties", rr.archetypes.RecordingInfo(
+                           start_time=time.time_ns(), name=recording_id)), *layout.scene]
+        for body, pose in statics.items():
+            self.chunks.append(layout.static(layout.entities[body], pose,
+                                             lambda: [_transform(*pose)]))
         if contacts:
-            self.stream.log("world/contacts/points",
-                            rr.Points3D.from_fields(radii=[0.004], colors=[CONTACT_COLOR]),
-                            static=True)
-            self.stream.log("world/contacts/forces",
-                            rr.Arrows3D.from_fields(radii=[0.002], colors=[FORCE_COLOR]),
-                            static=True)
+            self.chunks += [
+                layout.static("world/contacts/points", None, lambda: [rr.Points3D.from_fields(
+                    radii=[0.004], colors=[CONTACT_COLOR])]),
+                layout.static("world/contacts/forces", None, lambda: [rr.Arrows3D.from_fields(
+                    radii=[0.002], colors=[FORCE_COLOR])])]
 
     def markers(self, markers: list) -> None:
-        """Static goal markers: (shape, Pose, RGBA uint8 (4,)) each, as a pose and the
-        shape's geometry in the marker's frame."""
-        for k, (shape, pose, rgba) in enumerate(markers):
-            self.stream.log(f"world/goals/{k}", _transform(pose.position, pose.orientation),
-                            *self.layout.marker(shape, rgba), static=True)
+        """Static goal markers: (shape, position (3,) m, orientation (4,) (w, x, y, z),
+        RGBA (4,) in [0, 255]) each, as a pose and the shape's geometry in the marker's
+        frame (the same entity: two static rows)."""
+        for k, (shape, position, orientation, rgba) in enumerate(markers):
+            entity = f"world/goals/{k}"
+            self.chunks += [_static_chunk(entity, _transform(position, orientation)),
+                            self.layout.static(entity, pickle.dumps((shape, rgba)),
+                                               lambda: _geometry(shape, Pose(), rgba))]
 
     def action_names(self, names: list) -> None:
         """Name the series of ``/action`` (one name per action entry)."""
-        self.stream.log("action", rr.SeriesLines(names=list(names)), static=True)
+        self.chunks.append(self.layout.static("action", tuple(names),
+                                              lambda: [rr.SeriesLines(names=list(names))]))
 
     def states(self, steps, times, position, orientation) -> None:
         """The moving bodies' poses: position (T, m, 3) m, orientation (T, m, 4) (w, x, y, z),
@@ -254,19 +303,18 @@ class _File:
         indexes = _indexes(steps, times)
         xyzw = _xyzw(orientation)
         for k, body in enumerate(self.layout.moving):
-            self.stream.send_columns(self.layout.entities[body], indexes=indexes,
-                                     columns=rr.Transform3D.columns(translation=position[:, k],
-                                                                    quaternion=xyzw[:, k]))
+            self.chunks.append(Chunk.from_columns(
+                self.layout.entities[body], indexes,
+                rr.Transform3D.columns(translation=position[:, k], quaternion=xyzw[:, k])))
 
     def scalars(self, steps, times, reward, action, success) -> None:
         """reward (T,), action (T, a), success (T,) 0 or 1."""
         indexes = _indexes(steps, times)
-        self.stream.send_columns("reward", indexes=indexes,
-                                 columns=rr.Scalars.columns(scalars=reward))
-        self.stream.send_columns("success", indexes=indexes,
-                                 columns=rr.Scalars.columns(scalars=success))
-        self.stream.send_columns("action", indexes=indexes, columns=rr.Scalars.columns(
-            scalars=action.ravel()).partition(lengths=np.full(len(action), action.shape[1])))
+        self.chunks += [
+            Chunk.from_columns("reward", indexes, rr.Scalars.columns(scalars=reward)),
+            Chunk.from_columns("success", indexes, rr.Scalars.columns(scalars=success)),
+            Chunk.from_columns("action", indexes, rr.Scalars.columns(scalars=action.ravel())
+                               .partition(lengths=np.full(len(action), action.shape[1])))]
 
     def contacts(self, steps, times, points, origins, vectors) -> None:
         """Per row: contact points (k, 3) m, force arrows' origins and vectors (p, 3) m."""
@@ -274,14 +322,25 @@ class _File:
         points_column = rr.Points3D.columns(positions=np.concatenate(points))
         arrows_column = rr.Arrows3D.columns(origins=np.concatenate(origins),
                                             vectors=np.concatenate(vectors))
-        self.stream.send_columns("world/contacts/points", indexes=indexes,
-                                 columns=points_column.partition(lengths=[len(p) for p in points]))
-        self.stream.send_columns("world/contacts/forces", indexes=indexes,
-                                 columns=arrows_column.partition(lengths=[len(o) for o in origins]))
+        self.chunks += [
+            Chunk.from_columns("world/contacts/points", indexes,
+                               points_column.partition(lengths=[len(p) for p in points])),
+            Chunk.from_columns("world/contacts/forces", indexes,
+                               arrows_column.partition(lengths=[len(o) for o in origins]))]
 
     def close(self) -> None:
-        """Complete the file (rerun writes its footer)."""
-        self.stream.disconnect()
+        """Write the file (its chunks, then rerun's footer)."""
+        ChunkStore.from_chunks(self.chunks).write_rrd(
+            self.path, application_id=self.layout.application_id,
+            recording_id=self.recording_id)
+        self.chunks = []
+
+
+def _static_chunk(entity: str, *archetypes) -> Chunk:
+    """One static row of ``archetypes`` at ``entity``."""
+    return Chunk.from_columns(entity, [], [batch.partition([len(batch.as_arrow_array())])
+                                           for archetype in archetypes
+                                           for batch in archetype.as_component_batches()])
 
 
 def _indexes(steps, times) -> list:
@@ -379,17 +438,6 @@ def _transform(position, orientation) -> rr.Transform3D:
 def _xyzw(q) -> np.ndarray:
     """Quaternion(s) (..., 4) (w, x, y, z) -> rerun's (x, y, z, w)."""
     return np.asarray(q)[..., [1, 2, 3, 0]]
-
-
-@functools.lru_cache(maxsize=32)
-def _blueprint_file(application_id: str, eye: tuple | None, target: tuple | None,
-                    scalars: bool, grid: bool) -> bytes:
-    """``_blueprint(eye, target, scalars, grid)`` saved for ``application_id`` as an ``.rbl``
-    file's bytes; built once per layout (it takes ~25 ms)."""
-    with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / "blueprint.rbl"
-        _blueprint(eye, target, scalars, grid).save(application_id, path)
-        return path.read_bytes()
 
 
 def _blueprint(eye, target, scalars: bool, grid: bool) -> rrb.Blueprint:

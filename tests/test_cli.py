@@ -34,8 +34,8 @@ def test_record_writes_one_readable_file_per_episode(tmp_path, capsys):
     assert main(args) == 0
     folder = tmp_path / "rigid_gym-Throw-v0"
     assert sorted(p.name for p in folder.iterdir()) == [
-        "random-seed1-episode-0.rrd", "random-seed1-episode-1.rrd"]
-    for path in folder.iterdir():
+        "random-seed1-episode-0.rrd", "random-seed1-episode-1.rrd", "rigid_gym-Throw-v0.rbl"]
+    for path in folder.glob("*.rrd"):
         (recording,) = RrdReader(path).recordings()
         assert recording.application_id == "rigid_gym-Throw-v0"
     out = capsys.readouterr().out
@@ -111,9 +111,16 @@ def test_replay_runs_the_viewer_installed_with_this_python(tmp_path, monkeypatch
     fake.chmod(0o755)
     monkeypatch.setattr(cli, "find_rerun", lambda: str(fake))
     episode = tmp_path / "episode.rrd"
-    episode.write_bytes(b"")
+    episode.write_bytes(b"")  # not a rerun file: opened alone
     assert main(["replay", str(episode)]) == 0
     assert log.read_text().split() == [str(episode)]
+    # recordings are opened with the layout beside them (once for several files)
+    assert main(["record", "rigid_gym/Throw-v0", "--policy", "random", "--episodes", "2",
+                 "--out", str(tmp_path), "--run", "r"]) == 0
+    folder = tmp_path / "rigid_gym-Throw-v0"
+    episodes = [str(folder / f"r-episode-{k}.rrd") for k in range(2)]
+    assert main(["replay", *episodes]) == 0
+    assert log.read_text().split() == [*episodes, str(folder / "rigid_gym-Throw-v0.rbl")]
 
 
 def test_replay_explains_a_missing_file_or_viewer(tmp_path, monkeypatch, capsys):

@@ -70,6 +70,23 @@ def static_rows(path) -> dict:
     return counts
 
 
+def views_beside(path) -> dict:
+    """{view kind ("3D", "TimeSeries"): [origins]} of the blueprint beside the file ``path``
+    (``<application id>.rbl`` in its folder), which must be that application's only one."""
+    application_id = RrdReader(path).recordings()[0].application_id
+    reader = RrdReader(path.parent / f"{application_id}.rbl")
+    assert [b.application_id for b in reader.blueprints()] == [application_id]
+    assert RrdReader(path).blueprints() == []  # the file itself holds only the recording
+    views = {}
+    for chunk in reader.stream(store=reader.blueprints()[0]):
+        batch = chunk.to_record_batch()
+        if "ViewBlueprint:class_identifier" in batch.schema.names:
+            kind = batch.column("ViewBlueprint:class_identifier").to_pylist()[0][0]
+            origin = batch.column("ViewBlueprint:space_origin").to_pylist()[0][0]
+            views.setdefault(kind, []).append(origin)
+    return views
+
+
 def xyzw(orientation: np.ndarray) -> np.ndarray:
     return np.asarray(orientation)[..., [1, 2, 3, 0]]
 
@@ -118,7 +135,9 @@ def test_the_file_holds_the_episode_exactly(env_id, tmp_path):
 
     recordings = RrdReader(path).recordings()
     assert [r.application_id for r in recordings] == [env_id.replace("/", "-")]
-    assert len(RrdReader(path).blueprints()) == 1
+    views = views_beside(path)
+    assert views["3D"] == ["/world"]
+    assert sorted(views["TimeSeries"]) == ["/action", "/reward", "/success"]
     for body in task.scene.bodies:
         entity = f"/world/bodies/{body.name}"
         if body.motion == STATIC:  # logged once, with its pose
@@ -166,7 +185,7 @@ def test_geometry_goals_and_layout_are_in_every_file_once(env_id, tmp_path):
                                    env.unwrapped.goal.reshape(-1, 3)[:, :2].astype(np.float32))
     assert len(env.paths) == 2
     for path in env.paths:
-        assert len(RrdReader(path).blueprints()) == 1
+        assert set(views_beside(path)) == {"3D", "TimeSeries"}
         counts = static_rows(path)
         for body in env.unwrapped.scene.bodies:  # one row of geometry per body
             entity = f"/world/bodies/{body.name}"
@@ -286,7 +305,7 @@ def test_trigger_names_and_unfinished_episodes(tmp_path):
     env.close()
     folder = tmp_path / "rigid_gym-Throw-v0"
     assert sorted(p.name for p in folder.iterdir()) == [
-        "r1-episode-0.rrd", "r1-episode-2.rrd", "r1-episode-4.rrd"]
+        "r1-episode-0.rrd", "r1-episode-2.rrd", "r1-episode-4.rrd", "rigid_gym-Throw-v0.rbl"]
     step, _ = temporal(folder / "r1-episode-4.rrd", "/world/bodies/gripper",
                        "Transform3D:translation")
     assert step.tolist() == [0, 1]
@@ -300,7 +319,7 @@ def test_rerun_off_records_nothing_and_breaks_nothing(tmp_path, monkeypatch):
     env.close()
     with WorldRecorder(env.unwrapped.world, tmp_path / "world.rrd") as recorder:
         recorder.record()
-    assert env.paths == [] and not any(tmp_path.rglob("*.rrd"))
+    assert env.paths == [] and not any(tmp_path.rglob("*.rr[db]"))
 
 
 # -- a World --------------------------------------------------------------------------------------
@@ -339,6 +358,7 @@ def test_a_world_recording_holds_every_body_pose_and_shape(tmp_path):
                                       positions[:, body.index].astype(np.float32))
         np.testing.assert_array_equal(rows(quaternion, 4),
                                       xyzw(orientations[:, body.index]).astype(np.float32))
+    assert views_beside(path) == {"3D": ["/world"]}  # a World has no reward plot
     # 20 rows sent every 7 steps: in 3 chunks
     chunks = RrdReader(path).stream().filter(content="/world/bodies/box", is_static=False)
     assert len(list(chunks)) == 3
