@@ -64,11 +64,12 @@ class EnvTime(gym.Wrapper):
 
 
 def make(env_id: str, folder: Path | None, contacts: bool = False):
-    """(outer, inner): EnvTime wrappers around the recorder and around the env (the same
-    one when ``folder`` is None: not recorded)."""
+    """(outer, inner): EnvTime wrappers around the recorder and around the env; when
+    ``folder`` is None (not recorded), directly around each other, so that both kinds pay
+    for the same two timing layers."""
     inner = EnvTime(gym.make(env_id, max_episode_steps=STEPS))
     if folder is None:
-        return inner, inner
+        return EnvTime(inner), inner
     return EnvTime(RecordRerun(inner, folder, episode_trigger=lambda k: True, run="bench",
                                contacts=contacts)), inner
 
