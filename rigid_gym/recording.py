@@ -353,15 +353,12 @@ class _Recording:
 
     def record(self, step: int, reward: float = 0.0, action=None, success: bool = False) -> None:
         """Buffer the bodies' poses (and contacts, if on) at ``step``; for an env after a step
-        (``step`` > 0), also its reward, action (a,) and success."""
+        (an ``action`` given), also its reward, action (a,) and success."""
         w, s = self.world, self.world.state
-        if step and action is not None:
-            self.rows.append(step, w.time, position=s.position[self.index],
-                             orientation=s.orientation[self.index], reward=reward,
-                             action=action, success=success)
-        else:
-            self.rows.append(step, w.time, position=s.position[self.index],
-                             orientation=s.orientation[self.index])
+        scalars = {} if action is None else {"reward": reward, "action": action,
+                                             "success": success}
+        self.rows.append(step, w.time, position=s.position[self.index],
+                         orientation=s.orientation[self.index], **scalars)
         if self.options.contacts:
             self.contacts.append((step, w.time,
                                   *_contacts(w, self.index, self.options.force_scale)))

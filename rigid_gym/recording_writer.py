@@ -108,7 +108,7 @@ class Writer:
 
     def flush(self) -> None:
         """Hand the held messages over now; waits only while the pipe is full (the writer is
-        behind by ~64 KiB)."""
+        behind by ``PIPE_BYTES``, or 64 KiB where the pipe could not be widened)."""
         batch, self.pending = self.pending, []
         try:
             self.process.stdin.write(pickle.dumps(batch, protocol=pickle.HIGHEST_PROTOCOL))
