@@ -5,7 +5,10 @@ recorded: the worst case; training records a few), ``--repeats`` rounds each tim
 ``--episodes`` seeded episodes bare and the same episodes recorded, in alternating order so
 that load from other processes hits both alike. A recorded round ends when the writer process
 has written all its files (``RecordRerun.sync``), and that wait is part of its time.
-Reported: the median steps/s of each, the overhead (bare / recorded - 1), the recorder's
+Reported: the median steps/s of each; the overhead, the median over rounds of bare /
+recorded - 1 where each recorded round is paired with the bare round next to it in time (so
+that the machine's drift between rounds cancels), and the spread of those ratios (first and
+third quartiles); the recorder's
 time per episode in the env's process measured directly (all time in the wrapper that is not
 spent in the env: buffering, handing rows over, the final wait) and its share of a recorded
 episode's time, the writer process's CPU time per episode (from /proc: what the files cost
@@ -18,7 +21,7 @@ recorder's own time.
 recorded, alternating, ``--repeats`` times each: what recording costs where it is used.
 
     python benchmarks/recording.py                  # about a minute on 2 cores
-    python benchmarks/recording.py --repeats 9 --episodes 20 --training
+    python benchmarks/recording.py --training       # about 4 minutes
 """
 
 import argparse
@@ -101,7 +104,7 @@ def measure(env_id: str, repeats: int, episodes: int, folder: Path) -> dict:
     """Median steps/s bare and recorded, the recorder's median ms per episode, the writer's
     CPU ms per episode, file sizes. Each kind keeps one env for all its rounds, as training
     does (the recorder sends what its files share at its first episode)."""
-    bare_rates, recorded_rates, recorder_ms = [], [], []
+    bare_rates, recorded_rates, recorder_ms, ratios = [], [], [], []
     seeds = range(episodes)
     envs = {"bare": make(env_id, None), "recorded": make(env_id, folder)}
     for env, _ in envs.values():
@@ -118,6 +121,7 @@ def measure(env_id: str, repeats: int, episodes: int, folder: Path) -> dict:
             else:
                 recorded_rates.append(steps / seconds)
                 recorder_ms.append(1e3 * (env.seconds - inner.seconds) / episodes)
+        ratios.append(bare_rates[-1] / recorded_rates[-1])
     writer_ms = 1e3 * (cpu_seconds(writer().process.pid) - writer_start) / (repeats * episodes)
     for env, _ in envs.values():
         env.close()
@@ -128,7 +132,9 @@ def measure(env_id: str, repeats: int, episodes: int, folder: Path) -> dict:
         env.close()
         sizes[contacts] = env.env.paths[0].stat().st_size / 1024
     bare, recorded = statistics.median(bare_rates), statistics.median(recorded_rates)
-    return {"bare": bare, "recorded": recorded, "overhead": bare / recorded - 1.0,
+    quartiles = statistics.quantiles(ratios, n=4) if len(ratios) > 1 else ratios * 3
+    return {"bare": bare, "recorded": recorded, "overhead": statistics.median(ratios) - 1.0,
+            "spread": (quartiles[0] - 1.0, quartiles[2] - 1.0),
             "recorder_ms": statistics.median(recorder_ms), "writer_ms": writer_ms,
             "episode_ms": 1e3 * STEPS / recorded, "kib": sizes[False],
             "kib_contacts": sizes[True]}
@@ -158,9 +164,11 @@ def training_rates(repeats: int, folder: Path) -> tuple[float, float]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--repeats", type=int, default=5, help="rounds per task (default 5)")
-    parser.add_argument("--episodes", type=int, default=10,
-                        help="episodes per round and kind (default 10)")
+    parser.add_argument("--repeats", type=int, default=9, help="rounds per task (default 9)")
+    parser.add_argument("--episodes", type=int, default=60,
+                        help="episodes per round and kind (default 60: the wait for the "
+                             "writer's last file at a round's end, counted as recording, is "
+                             "then ~0.5%% of the round)")
     parser.add_argument("--training", action="store_true",
                         help="also time SAC + HER training on Push, bare and recorded")
     args = parser.parse_args()
@@ -169,17 +177,18 @@ def main() -> None:
                      f"{args.episodes}")
     print(f"{STEPS}-step scripted episodes, every one recorded; medians of {args.repeats} "
           f"rounds of {args.episodes} episodes\n")
-    print("| task | steps/s bare | steps/s recorded | overhead | recorder, ms per episode "
-          "(share) | writer CPU, ms per episode | file per episode | with contacts |")
+    print("| task | steps/s bare | steps/s recorded | overhead (quartiles) | recorder, ms per "
+          "episode (share) | writer CPU, ms per episode | file per episode | with contacts |")
     print("|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as folder:
         for env_id in TASKS:
             r = measure(env_id, args.repeats, args.episodes, Path(folder))
             share = r["recorder_ms"] / r["episode_ms"]
+            low, high = (100 * x for x in r["spread"])
             print(f"| {env_id.split('/')[1]} | {r['bare']:,.0f} | {r['recorded']:,.0f} | "
-                  f"{100 * r['overhead']:+.1f}% | {r['recorder_ms']:.2f} ({100 * share:.1f}%) | "
-                  f"{r['writer_ms']:.1f} | {r['kib']:.0f} KiB | {r['kib_contacts']:.0f} KiB |",
-                  flush=True)
+                  f"{100 * r['overhead']:+.1f}% ({low:+.1f}..{high:+.1f}) | "
+                  f"{r['recorder_ms']:.2f} ({100 * share:.1f}%) | {r['writer_ms']:.1f} | "
+                  f"{r['kib']:.0f} KiB | {r['kib_contacts']:.0f} KiB |", flush=True)
         if args.training:
             bare, recorded = training_rates(args.repeats, Path(folder))
             print(f"\nSAC + HER on Push, {TRAINING_STEPS} env steps, medians of "

@@ -43,7 +43,7 @@ Rerun stores translations and quaternions as float32 and scalars as float64.
 50-step episode of the fastest task), so the recorders only buffer rows in numpy (~3 us per
 step) and hand each file's rows to a writer process (``rigid_gym.recording_writer``, one per
 recording process, started at its first file), which does all the rerun work at a lower
-priority while the env goes on: ~0.5 ms per file in the env's process, the rest on another
+priority while the env goes on: ~0.35 ms per file in the env's process, the rest on another
 core when there is one (``benchmarks/recording.py``). Rows are handed over at the end of an
 episode, or every ``chunk_steps`` steps, bounding the env process's memory; the writer holds a
 file's rows (~30 bytes per moving body and step) until the file ends.
@@ -73,7 +73,7 @@ from rerun.chunk import RrdReader
 
 from rigid_gym.envs.base import RigidGymEnv
 from rigid_gym.kernels.integrate import STATIC
-from rigid_gym.recording_writer import Writer, blueprint_path, writer
+from rigid_gym.recording_writer import Writer, blueprint_path, row_columns, writer
 from rigid_gym.render import MARKER_COLOR
 from rigid_gym.shapes import Plane, Pose
 
@@ -165,7 +165,7 @@ class RecordRerun(gym.Wrapper):
         name = f"{self.run}-episode-{self.episode_id}"
         path = self.folder / f"{name}.rrd"
         recording = _open(path, name, task.world, 0, self.options, self._scene_layout,
-                          self.action_space.shape[0])
+                          self.action_space.shape[0], first=not self.paths)
         if recording is None:
             return
         self._recording, self._step = recording, 0
@@ -309,15 +309,17 @@ class _Options:
 
 
 def _open(path: Path, recording_id: str, world, index: int, options: _Options, layout,
-          actions: int = 0) -> _Recording | None:
+          actions: int = 0, first: bool = True) -> _Recording | None:
     """A new recording of world ``index`` of ``world`` to ``path``, or None when rerun is off
     (``RERUN=off``, ``0`` or ``false``, which rerun documents). ``layout``: a function of the
     writer that gives the key of the scene's layout there; ``actions``: an env's action size
-    (0: no scalars)."""
+    (0: no scalars); ``first``: the recorder's first file, whose folder is made here, so that
+    a bad folder fails here (a stat costs ~20 us between env steps; for later files the writer
+    makes the folder again if it has gone)."""
     if os.environ.get("RERUN", "").strip().lower() in ("0", "off", "false"):
         return None
-    if not path.parent.is_dir():  # one stat; mkdir(exist_ok=True) takes ~25 us a file
-        path.parent.mkdir(parents=True, exist_ok=True)  # here, so that a bad folder fails here
+    if first:
+        path.parent.mkdir(parents=True, exist_ok=True)
     files = writer()
     return _Recording(files, path, recording_id, layout(files), world, index, options, actions)
 
@@ -325,40 +327,36 @@ def _open(path: Path, recording_id: str, world, index: int, options: _Options, l
 class _Recording:
     """One file of one world of ``world`` (index ``index``): opened in the writer on
     creation; ``record`` buffers rows, which ``flush`` hands to the writer; ``close``
-    completes the file. Small values go to the writer as plain tuples, rows as a few arrays
-    per kind: pickling a numpy array costs ~5 us however small it is. ``actions``: an env's
-    action size, whose rows also hold the reward, action and success (0: a World's)."""
+    completes the file. Small values go to the writer as plain tuples, rows as the bytes of
+    one array (``_Rows``; the writer keeps the moving bodies' columns): pickling a numpy array costs ~7 us
+    however small it is, ~25 us between env steps, its bytes a quarter of that. ``actions``: an env's action size, whose
+    rows also hold the reward, action and success (0: a World's)."""
 
     def __init__(self, files: Writer, path: Path, recording_id: str, layout: int, world,
                  index: int, options: _Options, actions: int = 0):
-        self.files, self.path = files, path
+        self.files, self.path = files, str(path)  # a str pickles ~5x faster than a Path
         self.world, self.index, self.options = world, index, options
         bodies = world.scene.bodies
-        self.moving = np.array([b.index for b in bodies if b.motion != STATIC], dtype=np.intp)
         statics = {b.index: (tuple(world.state.position[index, b.index].tolist()),
                              tuple(world.state.orientation[index, b.index].tolist()))
                    for b in bodies if b.motion == STATIC}
-        count = len(bodies)  # all bodies' poses are buffered, the moving ones sent
-        scalars = {"reward": (), "action": (actions,), "success": ()} if actions else {}
-        self.rows = _Rows(position=(count, 3), orientation=(count, 4), **scalars)
+        self.rows = _Rows(len(bodies), actions)
         self.contacts: list[tuple] = []  # (step, time, points, origins, vectors): ragged rows
         self.closed = False
-        files.send("open", path, recording_id, layout, statics, options.contacts)
+        files.send("open", self.path, recording_id, layout, statics, options.contacts)
         atexit.register(self.close)
 
     def send(self, kind: str, *values) -> None:
         """Hand the writer a message about this file: one of ``recording_writer``'s kinds
-        ("markers", "action_names", "states", ...) and its values."""
+        ("markers", "action_names", "rows", ...) and its values."""
         self.files.send(kind, self.path, *values)
 
     def record(self, step: int, reward: float = 0.0, action=None, success: bool = False) -> None:
         """Buffer the bodies' poses (and contacts, if on) at ``step``; for an env after a step
         (an ``action`` given), also its reward, action (a,) and success."""
         w, s = self.world, self.world.state
-        scalars = {} if action is None else {"reward": reward, "action": action,
-                                             "success": success}
-        self.rows.append(step, w.time, position=s.position[self.index],
-                         orientation=s.orientation[self.index], **scalars)
+        self.rows.append(step, w.time, s.position[self.index], s.orientation[self.index],
+                         reward, success, action)
         if self.options.contacts:
             self.contacts.append((step, w.time,
                                   *_contacts(w, self.index, self.options.force_scale)))
@@ -385,13 +383,8 @@ class _Recording:
 
     def _send_rows(self) -> None:
         if len(self.rows):
-            steps, times, rows = self.rows.take()
-            self.send("states", steps, times, rows["position"][:, self.moving],
-                      rows["orientation"][:, self.moving])
-            scalars = slice(1 if steps[0] == 0 else 0, None)  # none at an env's reset
-            if "reward" in rows and len(steps[scalars]):
-                self.send("scalars", steps[scalars], times[scalars], rows["reward"][scalars],
-                          rows["action"][scalars], rows["success"][scalars])
+            rows = self.rows.take()
+            self.send("rows", rows.tobytes(), rows.shape[1])  # bytes pickle ~4x faster
         if self.contacts:
             steps, times, points, origins, vectors = zip(*self.contacts)
             self.contacts = []
@@ -399,49 +392,51 @@ class _Recording:
 
 
 class _Rows:
-    """Rows buffered for columns: a step, a time (s) and named float64 values of fixed
-    shapes per row, kept in arrays that grow as needed (no object per row)."""
+    """Rows buffered for columns, one float64 array of them that grows as needed (no object
+    per row, and one buffer to hand over).
+    A row of ``bodies`` bodies and ``actions`` action entries (0: a World's rows) holds:
 
-    def __init__(self, **shapes: tuple):
-        self.shapes = shapes
-        self._empty()
+        step, sim_time (s), positions (bodies x 3, m), orientations (bodies x 4, w x y z)
+        [, reward, success (0 or 1), action (actions)]
+
+    A row without an action (an env's reset) has NaN scalars.
+    """
+
+    def __init__(self, bodies: int, actions: int = 0):
+        self.orientations, self.scalars = row_columns(bodies)
+        self.width = self.scalars + (2 + actions if actions else 0)
+        self.count = 0
+        self.data = np.empty((0, self.width))
 
     def __len__(self) -> int:
         return self.count
 
-    def append(self, step: int, sim_time: float, **values) -> None:
-        """Add a row at ``step``, ``sim_time``, and copy ``values`` into it by name (those
-        not given are left undefined)."""
-        if self.count == len(self.steps):
-            self._grow(max(64, 2 * self.count))
-        k = self.count
-        self.steps[k], self.times[k] = step, sim_time
-        for name, value in values.items():
-            self.values[name][k] = value
+    def append(self, step: int, sim_time: float, position: np.ndarray,
+               orientation: np.ndarray, reward: float = 0.0, success: bool = False,
+               action: np.ndarray | None = None) -> None:
+        """Add a row: position (bodies, 3), orientation (bodies, 4); the scalars if
+        ``action`` (actions,) is given."""
+        if self.count == len(self.data):
+            grown = np.empty((max(64, 2 * self.count), self.width))
+            grown[:self.count] = self.data[:self.count]
+            self.data = grown
+        row = self.data[self.count]
+        row[0], row[1] = step, sim_time
+        row[2:self.orientations] = position.ravel()
+        row[self.orientations:self.scalars] = orientation.ravel()
+        if self.width > self.scalars:
+            if action is None:
+                row[self.scalars:] = np.nan
+            else:
+                row[self.scalars], row[self.scalars + 1] = reward, success
+                row[self.scalars + 2:] = action
         self.count += 1
 
-    def take(self) -> tuple[np.ndarray, np.ndarray, dict]:
-        """(steps (T,), times (T,) s, {name: values (T, ...)}), and empty the buffer (the
-        arrays returned are not reused)."""
-        k = self.count
-        taken = self.steps[:k], self.times[:k], {n: v[:k] for n, v in self.values.items()}
-        self._empty()
+    def take(self) -> np.ndarray:
+        """The rows (T, width), and empty the buffer (the array returned is not reused)."""
+        taken, self.count = self.data[:self.count], 0
+        self.data = np.empty((0, self.width))
         return taken
-
-    def _empty(self) -> None:
-        self.count = 0
-        self.steps, self.times = np.empty(0, dtype=np.int64), np.empty(0)
-        self.values = {name: np.empty((0, *shape)) for name, shape in self.shapes.items()}
-
-    def _grow(self, rows: int) -> None:
-        """Room for ``rows`` rows, the current ones kept."""
-        def larger(values: np.ndarray) -> np.ndarray:
-            grown = np.empty((rows, *values.shape[1:]), dtype=values.dtype)
-            grown[:self.count] = values[:self.count]
-            return grown
-
-        self.steps, self.times = larger(self.steps), larger(self.times)
-        self.values = {name: larger(values) for name, values in self.values.items()}
 
 
 # -- helpers ------------------------------------------------------------------------------------

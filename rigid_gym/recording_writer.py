@@ -16,12 +16,16 @@ Messages are tuples, handed over in pickled lists on the writer's standard input
 
 - ``("layout", key, scene, application_id, blueprint)``: what files of ``scene`` share, built
   once (``_Layout``); blueprint: the ``_blueprint`` arguments (eye, target, scalars, grid).
-- ``("open", path, recording_id, key, statics, contacts)``: start a file; statics: {body
+- ``("open", path, recording_id, key, statics, contacts)``: start a file (path: a str, as
+  in every message about a file); statics: {body
   index: (position (3,) m, orientation (4,) w, x, y, z)} of the static bodies, as tuples.
 - ``("markers", path, markers)``: goal markers, (shape, position, orientation, RGBA) each
   (``_File.markers``).
 - ``("action_names", path, names)``.
-- ``("states" | "scalars" | "contacts", path, steps (T,), times (T,) s, values)``: rows.
+- ``("rows", path, data, w)``: rows (T, w) of ``recording._Rows``, as the bytes of a
+  float64 array: step, time, every body's pose, and for an env its reward, success and
+  action (none at step 0, the env's reset).
+- ``("contacts", path, steps (T,), times (T,) s, points, origins, vectors)``: rows.
 - ``("close", path)``: write the file (until then its chunks are held in memory: ~40 bytes
   per moving body and row).
 - ``("sync",)``: answered on standard output once everything sent before it is written.
@@ -179,7 +183,7 @@ def main() -> None:
     answers = os.fdopen(os.dup(1), "wb")  # standard output is for answers only:
     os.dup2(2, 1)  # what anything else prints goes to standard error
     layouts: dict[int, _Layout] = {}
-    files: dict[Path, _File] = {}
+    files: dict[str, _File] = {}
     try:
         for kind, *args in _messages(sys.stdin.buffer):
             if kind == "stop":
@@ -192,7 +196,7 @@ def main() -> None:
                 layouts[key] = _Layout(scene, application_id, blueprint)
             elif kind == "open":
                 path, recording_id, key, statics, contacts = args
-                files[path] = _File(path, recording_id, layouts[key], statics, contacts)
+                files[path] = _File(Path(path), recording_id, layouts[key], statics, contacts)
             elif kind == "close":
                 files.pop(args[0]).close()
             else:
@@ -257,6 +261,13 @@ class _Layout:
             self.blueprint_folders.add(folder)
 
 
+def row_columns(bodies: int) -> tuple[int, int]:
+    """The columns of a row of ``bodies`` bodies (``recording._Rows``) where the
+    orientations start and where the reward is (step, sim_time and the positions come
+    first)."""
+    return 2 + 3 * bodies, 2 + 7 * bodies
+
+
 def blueprint_path(folder: Path, application_id: str) -> Path:
     """Where the blueprint of ``application_id``'s files in ``folder`` is."""
     return Path(folder) / f"{application_id}.rbl"
@@ -297,24 +308,34 @@ class _File:
         self.chunks.append(self.layout.static("action", tuple(names),
                                               lambda: [rr.SeriesLines(names=list(names))]))
 
-    def states(self, steps, times, position, orientation) -> None:
-        """The moving bodies' poses: position (T, m, 3) m, orientation (T, m, 4) (w, x, y, z),
-        m = the scene's non-static bodies in order."""
+    def rows(self, data: bytes, width: int) -> None:
+        """Rows (T, width) of float64 as bytes: step, sim_time (s), every body's position
+        (n x 3, m) and orientation (n x 4, w x y z), n = the scene's bodies in order; for an
+        env, then its reward, success (0 or 1) and action (a), recorded from step 1 on. The
+        moving bodies' poses are written (a static body's is written once, on opening)."""
+        rows = np.frombuffer(data).reshape(-1, width)
+        n = len(self.layout.entities)
+        orientations, scalars = row_columns(n)
+        steps, times = rows[:, 0], rows[:, 1]
         indexes = _indexes(steps, times)
-        xyzw = _xyzw(orientation)
-        for k, body in enumerate(self.layout.moving):
+        position = rows[:, 2:orientations].reshape(len(rows), n, 3)
+        xyzw = _xyzw(rows[:, orientations:scalars].reshape(len(rows), n, 4))
+        for body in self.layout.moving:
             self.chunks.append(Chunk.from_columns(
                 self.layout.entities[body], indexes,
-                rr.Transform3D.columns(translation=position[:, k], quaternion=xyzw[:, k])))
-
-    def scalars(self, steps, times, reward, action, success) -> None:
-        """reward (T,), action (T, a), success (T,) 0 or 1."""
-        indexes = _indexes(steps, times)
-        self.chunks += [
-            Chunk.from_columns("reward", indexes, rr.Scalars.columns(scalars=reward)),
-            Chunk.from_columns("success", indexes, rr.Scalars.columns(scalars=success)),
-            Chunk.from_columns("action", indexes, rr.Scalars.columns(scalars=action.ravel())
-                               .partition(lengths=np.full(len(action), action.shape[1])))]
+                rr.Transform3D.columns(translation=position[:, body],
+                                       quaternion=xyzw[:, body])))
+        stepped = rows[steps > 0, scalars:]
+        if stepped.shape[1] and len(stepped):
+            indexes = _indexes(steps[steps > 0], times[steps > 0])
+            action = stepped[:, 2:]
+            self.chunks += [
+                Chunk.from_columns("reward", indexes, rr.Scalars.columns(scalars=stepped[:, 0])),
+                Chunk.from_columns("success", indexes,
+                                   rr.Scalars.columns(scalars=stepped[:, 1])),
+                Chunk.from_columns("action", indexes,
+                                   rr.Scalars.columns(scalars=action.ravel())
+                                   .partition(lengths=np.full(len(action), action.shape[1])))]
 
     def contacts(self, steps, times, points, origins, vectors) -> None:
         """Per row: contact points (k, 3) m, force arrows' origins and vectors (p, 3) m."""
@@ -329,7 +350,9 @@ class _File:
                                arrows_column.partition(lengths=[len(o) for o in origins]))]
 
     def close(self) -> None:
-        """Write the file (its chunks, then rerun's footer)."""
+        """Write the file (its chunks, then rerun's footer), making its folder again if it
+        has gone since the file was opened."""
+        self.path.parent.mkdir(parents=True, exist_ok=True)
         ChunkStore.from_chunks(self.chunks).write_rrd(
             self.path, application_id=self.layout.application_id,
             recording_id=self.recording_id)
