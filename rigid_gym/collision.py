@@ -52,6 +52,8 @@ class Collider:
         self.sweep = bounded >= SWEEP_MIN_BODIES if sweep is None else bool(sweep)
         self.bounds = np.zeros((num_worlds, n, 6))
         self.order = np.tile(np.arange(n, dtype=np.int64), (num_worlds, 1))
+        self.reach = np.zeros((num_worlds, n))
+        self.start = np.zeros((num_worlds, 3, n, 3))
         self.pair_count = np.zeros(num_worlds, dtype=np.int32)
         self.contact_count = np.zeros(num_worlds, dtype=np.int32)
         self._allocate_pairs(max(8, 2 * n))
@@ -61,7 +63,7 @@ class Collider:
     def pairs(self) -> Pairs:
         """The broad phase's buffers as the step kernels take them."""
         return Pairs(self.bounds, self.order, self.pair_a, self.pair_b, self.pair_count,
-                     self.pair_impulse, self.keys, self.tmp)
+                     self.pair_impulse, self.keys, self.tmp, self.reach, self.start)
 
     def grow_pairs(self) -> None:
         """Make room for at least the pairs the last broad phase found (pair_count)."""
@@ -96,7 +98,7 @@ class Collider:
                        self.motion, self.geometry, margin, dt, acceleration, self.sweep,
                        self.bounds[worlds], self.order[worlds], self.pair_a[worlds],
                        self.pair_b[worlds], self.pair_count[worlds], self.keys[worlds],
-                       self.tmp[worlds])
+                       self.tmp[worlds], self.reach[worlds])
             if int(self.pair_count[worlds].max(initial=0)) <= self.pair_a.shape[1]:
                 return
             self.grow_pairs()

@@ -113,7 +113,8 @@ _pool: ThreadPoolExecutor | None = None
 def advance(world, steps: int, phases: int = EVERY_PHASE) -> None:
     """Advance every world of ``world`` by ``steps`` steps, running the ``phases`` bits of
     each (``kernels.step``), in one kernel call per range of worlds (more only when the pair
-    buffers must grow first)."""
+    buffers must grow first: then a position phase alone, which found more pairs than fit,
+    runs again as a whole step)."""
     s, m, geo, pairs, work = world.state, world.model, world.geometry, world.collider, world.workspace
     done = np.zeros(world.num_worlds, dtype=np.int64)
     while True:
@@ -128,6 +129,8 @@ def advance(world, steps: int, phases: int = EVERY_PHASE) -> None:
         if np.all(done == steps):
             return
         pairs.grow_pairs()
+        if not phases & BROAD_PHASE:  # a position phase whose relist outgrew the buffers
+            phases = EVERY_PHASE  # put the step back to its start: it runs again whole
 
 
 def _world_ranges(num_worlds: int) -> list[tuple[int, int]]:

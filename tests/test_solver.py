@@ -310,16 +310,13 @@ def test_a_box_pushed_sideways_into_a_wall_holds_with_the_default_sweeps():
     assert _inner_box_sinking_into_wall(shock_sweeps=2) < 1e-4
 
 
-@pytest.mark.xfail(strict=True, reason="known failure (docs/architecture.md, Speed): the broad "
-                   "phase grows each body's box by its reach at the velocity it has when the "
-                   "step starts, so a resting box struck during the contact phase moves past "
-                   "it, into a neighbour whose pair was not listed: 2.5 mm of overlap here. "
-                   "xpasses once the margin bounds the speed a body can gain within the step")
 def test_a_struck_box_meets_its_resting_neighbour_in_the_same_step():
     """A 1 kg box at 5 m/s hits a resting one with a third 10 mm beyond it, no gravity, e = 0.
-    With the neighbour's pair listed the contact phase leaves no overlap (checked by growing
-    every box by 5 cm: 0 mm), so 0.5 mm is a bound well above round-off and well below the
-    2.5 mm of a contact found one step late."""
+    The broad phase grows a box by its reach at the step's starting velocity, so the struck
+    box's pair with the third is listed only when the step runs its impulse phases again
+    (``kernels/step.py``, MAX_RELISTS). With that pair listed the contact phase leaves no
+    overlap (checked by growing every box by 5 cm: 0 mm), so 0.5 mm is a bound well above
+    round-off and well below the 2.5 mm of a contact found one step late (before the relist)."""
     h = 0.05
     scene = rg.Scene(gravity=(0.0, 0.0, 0.0))
     scene.add_body(rg.Box((h, h, h)), mass=1.0, position=(-0.2, 0.0, 0.0), velocity=(5.0, 0, 0))

@@ -128,23 +128,26 @@ def sort_by_lower_x(order, bounds):
 
 @kernel
 def find_world_pairs(position, rotation, velocity, angular_velocity, motion, geo, margin, dt,
-                     acceleration, sweep, bounds, order, pair_a, pair_b, keys, tmp):
+                     acceleration, sweep, bounds, order, pair_a, pair_b, keys, tmp, reach):
     """Candidate pairs of one world, for poses anywhere within the next dt; returns how many.
 
     position (n, 3), rotation (n, 3, 3), velocity and angular_velocity (n, 3): body states;
     every box is grown by ``swept_margin`` (margin m, dt s, acceleration bound m/s^2;
-    dt = 0 for the current poses only). A plane is tested against the grown boxes too.
-    sweep: sort and sweep (True) or brute force; bounds (n, 6): scratch; order (n,) int64:
-    body indices, kept between calls (sort and sweep starts from the last order);
-    pair_a, pair_b (P,) int32 out; keys, tmp (P,) int64 scratch. The count may exceed P, in
-    which case only P pairs were written and the caller must grow the buffers.
+    dt = 0 for the current poses only), or by reach[i] (m) where that is larger, and reach
+    (n,) is raised to the growth used (zero it for the margins alone). A plane is tested
+    against the grown boxes too. sweep: sort and sweep (True) or brute force; bounds (n, 6):
+    scratch; order (n,) int64: body indices, kept between calls (sort and sweep starts from
+    the last order); pair_a, pair_b (P,) int32 out; keys, tmp (P,) int64 scratch. The count
+    may exceed P, in which case only P pairs were written and the caller must grow the
+    buffers.
     """
     n = position.shape[0]
     unbounded = geo.body_unbounded
     for i in range(n):
         if unbounded[i] == 0:
             grown = swept_margin(velocity[i], angular_velocity[i], geo, i, margin, dt, acceleration)
-            write_bounds(position[i], rotation[i], geo, i, grown, bounds[i])
+            reach[i] = max(reach[i], grown)
+            write_bounds(position[i], rotation[i], geo, i, reach[i], bounds[i])
     count = 0
     for p in range(n):
         if unbounded[p] == 0:
@@ -180,11 +183,12 @@ def find_world_pairs(position, rotation, velocity, angular_velocity, motion, geo
 
 @kernel
 def find_pairs(position, rotation, velocity, angular_velocity, motion, geo, margin, dt,
-               acceleration, sweep, bounds, order, pair_a, pair_b, pair_count, keys, tmp):
+               acceleration, sweep, bounds, order, pair_a, pair_b, pair_count, keys, tmp, reach):
     """``find_world_pairs`` for every world: arrays as there with a leading world axis B;
-    pair_count (B,) int32 out."""
+    pair_count (B,) int32 out; reach (B, n) is zeroed first (the margins alone)."""
     for w in range(position.shape[0]):
+        reach[w] = 0.0
         pair_count[w] = find_world_pairs(position[w], rotation[w], velocity[w],
                                          angular_velocity[w], motion, geo, margin, dt,
                                          acceleration, sweep, bounds[w], order[w], pair_a[w],
-                                         pair_b[w], keys[w], tmp[w])
+                                         pair_b[w], keys[w], tmp[w], reach[w])

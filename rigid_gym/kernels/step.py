@@ -13,7 +13,7 @@ bit-identical whether worlds run together or one by one, whole steps or phase by
 
 from collections import namedtuple
 
-from rigid_gym.kernels.broadphase import find_world_pairs
+from rigid_gym.kernels.broadphase import find_world_pairs, swept_margin
 from rigid_gym.kernels.integrate import (
     place_attached,
     update_world_positions,
@@ -27,12 +27,15 @@ from rigid_gym.kernels.solver import (
     resolve_world_contacts,
 )
 
-Pairs = namedtuple("Pairs", "bounds order pair_a pair_b pair_count pair_impulse keys tmp")
+Pairs = namedtuple("Pairs", "bounds order pair_a pair_b pair_count pair_impulse keys tmp "
+                             "reach start")
 """The broad phase's buffers, leading world axis B (n bodies, P pair capacity): bounds
 (B, n, 6) m; order (B, n) int64, sort-and-sweep's body order kept from step to step;
 pair_a, pair_b (B, P) int32; pair_count (B,) int32 (may exceed P: buffers too small);
 pair_impulse (B, P, 3) N s, each pair's impulse on its body a in the current step;
-keys, tmp (B, P) int64 sorting scratch."""
+keys, tmp (B, P) int64 sorting scratch; reach (B, n) m, how far each body's box was grown
+in the current step; start (B, 3, n, 3): velocity, angular momentum and angular velocity
+when the step's impulse phases began (restored to run them again with more pairs)."""
 
 Attachments = namedtuple("Attachments", "parent offset_position offset_orientation")
 """Bodies held rigidly by another (``World.attach``), leading world axis B: parent (B, n)
@@ -51,6 +54,9 @@ BROAD_PHASE, COLLISION_PHASE, VELOCITY_PHASE, CONTACT_PHASE, SHOCK_PHASE, POSITI
 """Bits of ``phases``: which of a step's phases a call runs, in this order (the step's)."""
 EVERY_PHASE = 63
 """All six: whole steps."""
+IMPULSE_PHASES = COLLISION_PHASE | VELOCITY_PHASE | CONTACT_PHASE | SHOCK_PHASE
+MAX_RELISTS = 4
+"""Times a step's impulse phases may run again with the pairs of the bodies' grown reach."""
 
 
 @kernel(inline=True)
@@ -67,6 +73,13 @@ def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, gr
     Attachments, whose bodies are put at their place before every step (with the broad phase)
     and after the last (with the position update). Forces and torques act during the first
     step and are cleared by its position update.
+
+    The broad phase lists the pairs that can touch if every body keeps its speed through the
+    step (``swept_margin``), but the impulse phases may speed a body up: a resting box struck
+    by another. Before the position update, a body whose new velocity reaches past its box
+    grows its box; if that lists more pairs, the velocities are put back as they were when
+    the impulse phases began and the phases run again with every pair (up to MAX_RELISTS
+    times), so a body is not moved into a neighbour whose pair was never listed.
     """
     s, m, c, a = state, model, settings, attached
     capacity = pairs.pair_a.shape[1]
@@ -76,32 +89,41 @@ def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, gr
                            s.angular_velocity, s.rotation, a.parent, a.offset_position,
                            a.offset_orientation)
             count = 0
+            pairs.reach[w] = 0.0
             if c.broad_phase:
                 count = find_world_pairs(s.position[w], s.rotation[w], s.velocity[w],
                                          s.angular_velocity[w], m.motion, geo, 0.0, dt,
                                          c.gravity, c.sweep, pairs.bounds[w], pairs.order[w],
                                          pairs.pair_a[w], pairs.pair_b[w], pairs.keys[w],
-                                         pairs.tmp[w])
+                                         pairs.tmp[w], pairs.reach[w])
             pairs.pair_count[w] = count
             if count > capacity:
                 return done
             pairs.pair_impulse[w, :count] = 0.0  # Coulomb's limit applies to the step's total
-        count = pairs.pair_count[w]
-        pair_a, pair_b, impulse = pairs.pair_a[w], pairs.pair_b[w], pairs.pair_impulse[w]
-        if phases & COLLISION_PHASE and c.collision_passes > 0 and count > 0:
-            resolve_world_contacts(s, m, geo, w, pair_a, pair_b, count, impulse, dt, COLLISION,
-                                   c.collision_passes, scratch)
-        if phases & VELOCITY_PHASE:
-            update_world_velocities(w, s.velocity, s.angular_momentum, s.angular_velocity,
-                                    s.rotation, s.force, s.torque, m.inverse_mass,
-                                    m.inverse_moments, m.motion, m.gravity, dt)
-        if phases & CONTACT_PHASE and c.contact_passes > 0 and count > 0:
-            resolve_world_contacts(s, m, geo, w, pair_a, pair_b, count, impulse, dt, CONTACT,
-                                   c.contact_passes, scratch)
-        if phases & SHOCK_PHASE and c.shock_sweeps > 0 and c.gravity > 0.0 and count > 0:
-            propagate_world_shock(s, m, geo, w, pair_a, pair_b, count, impulse, dt, c.up,
-                                  c.shock_sweeps, scratch, wide, graph)
+            keep_velocities(s.velocity[w], s.angular_momentum[w], s.angular_velocity[w],
+                            pairs.start[w], True)
+        impulse_phases(w, phases, dt, s, m, geo, pairs, scratch, wide, graph, c)
         if phases & POSITION_PHASE:
+            if c.broad_phase:
+                for _ in range(MAX_RELISTS):
+                    if not outgrown(w, dt, s, geo, pairs.reach[w]):
+                        break
+                    count = pairs.pair_count[w]
+                    more = find_world_pairs(s.position[w], s.rotation[w], s.velocity[w],
+                                            s.angular_velocity[w], m.motion, geo, 0.0, dt,
+                                            0.0, c.sweep, pairs.bounds[w],
+                                            pairs.order[w], pairs.pair_a[w], pairs.pair_b[w],
+                                            pairs.keys[w], pairs.tmp[w], pairs.reach[w])
+                    if more == count:  # boxes only grow: the same count is the same pairs
+                        break
+                    pairs.pair_count[w] = more
+                    keep_velocities(s.velocity[w], s.angular_momentum[w],
+                                    s.angular_velocity[w], pairs.start[w], False)
+                    if more > capacity:
+                        return done
+                    pairs.pair_impulse[w, :more] = 0.0
+                    impulse_phases(w, IMPULSE_PHASES, dt, s, m, geo, pairs, scratch, wide,
+                                   graph, c)
             update_world_positions(w, s.position, s.orientation, s.velocity, s.angular_momentum,
                                    s.angular_velocity, s.rotation, s.torque, m.inverse_moments,
                                    m.motion, dt, c.rotation_order)
@@ -112,6 +134,56 @@ def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, gr
                        s.angular_velocity, s.rotation, a.parent, a.offset_position,
                        a.offset_orientation)
     return steps
+
+
+@kernel(inline=True)
+def impulse_phases(w, phases, dt, s, m, geo, pairs, scratch, wide, graph, c):
+    """World w's collision, velocity update, contact and shock phases (those whose bits are
+    set in ``phases``) over its listed pairs; arguments as ``step_world``'s."""
+    count = pairs.pair_count[w]
+    pair_a, pair_b, impulse = pairs.pair_a[w], pairs.pair_b[w], pairs.pair_impulse[w]
+    if phases & COLLISION_PHASE and c.collision_passes > 0 and count > 0:
+        resolve_world_contacts(s, m, geo, w, pair_a, pair_b, count, impulse, dt, COLLISION,
+                               c.collision_passes, scratch)
+    if phases & VELOCITY_PHASE:
+        update_world_velocities(w, s.velocity, s.angular_momentum, s.angular_velocity,
+                                s.rotation, s.force, s.torque, m.inverse_mass,
+                                m.inverse_moments, m.motion, m.gravity, dt)
+    if phases & CONTACT_PHASE and c.contact_passes > 0 and count > 0:
+        resolve_world_contacts(s, m, geo, w, pair_a, pair_b, count, impulse, dt, CONTACT,
+                               c.contact_passes, scratch)
+    if phases & SHOCK_PHASE and c.shock_sweeps > 0 and c.gravity > 0.0 and count > 0:
+        propagate_world_shock(s, m, geo, w, pair_a, pair_b, count, impulse, dt, c.up,
+                              c.shock_sweeps, scratch, wide, graph)
+
+
+@kernel
+def keep_velocities(velocity, angular_momentum, angular_velocity, kept, keep):
+    """Copy one world's velocity, angular momentum and angular velocity (n, 3) each into
+    kept (3, n, 3) when ``keep``, else back from it."""
+    for i in range(velocity.shape[0]):
+        for k in range(3):
+            if keep:
+                kept[0, i, k] = velocity[i, k]
+                kept[1, i, k] = angular_momentum[i, k]
+                kept[2, i, k] = angular_velocity[i, k]
+            else:
+                velocity[i, k] = kept[0, i, k]
+                angular_momentum[i, k] = kept[1, i, k]
+                angular_velocity[i, k] = kept[2, i, k]
+
+
+@kernel(inline=True)
+def outgrown(w, dt, s, geo, reach):
+    """True when some body of world w, at its current velocity, moves further in dt than its
+    box was grown (reach (n,) m). Called before the position update, which moves a body by
+    its current velocities: no acceleration term (the broad phase's bounds the velocity
+    update's gravity)."""
+    for i in range(reach.shape[0]):
+        if geo.body_unbounded[i] == 0 and swept_margin(
+                s.velocity[w, i], s.angular_velocity[w, i], geo, i, 0.0, dt, 0.0) > reach[i]:
+            return True
+    return False
 
 
 @kernel
