@@ -188,5 +188,6 @@ def step(world, config: SolverConfig, profile: Profile) -> None:
     if on["shock_propagation"]:
         run("shock_propagation", SHOCK_PHASE)
     # 5. position update with the final velocities: X += dt V, q by the exact rotation; held
-    #    bodies put at their place again
+    #    bodies put at their place again. A body sped past its box first grows it, and with
+    #    the pairs that adds, phases 1-4 run again (timed here): kernels/step.py, step_world
     run("update_positions", POSITION_PHASE)

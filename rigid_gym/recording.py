@@ -52,8 +52,8 @@ file's rows (~30 bytes per moving body and step) until the file ends.
 ``close()`` returns, when ``step`` or ``reset`` raises (what was buffered is written, then the
 exception propagates), and when the process exits (an ``atexit`` hook hands over any open
 file and waits for the writer); a process killed outright loses only the rows it had not
-handed over (a writer killed outright loses the files it had not finished). Files of finished episodes are written in the background: ``sync()`` waits for
-them. Nothing is made until an episode starts, so the wrappers can be built inside
+handed over (a writer killed outright loses the files it had not finished). Files of
+finished episodes are written in the background: ``sync()`` waits for them. Nothing is made until an episode starts, so the wrappers can be built inside
 SubprocVecEnv workers (each worker has its own writer and files; the default run name contains
 the process id). ``RERUN=off`` in the environment turns recording off: nothing is written and
 nothing fails.
@@ -328,9 +328,10 @@ class _Recording:
     """One file of one world of ``world`` (index ``index``): opened in the writer on
     creation; ``record`` buffers rows, which ``flush`` hands to the writer; ``close``
     completes the file. Small values go to the writer as plain tuples, rows as the bytes of
-    one array (``_Rows``; the writer keeps the moving bodies' columns): pickling a numpy array costs ~7 us
-    however small it is, ~25 us between env steps, its bytes a quarter of that. ``actions``: an env's action size, whose
-    rows also hold the reward, action and success (0: a World's)."""
+    one array (``_Rows``; the writer keeps the moving bodies' columns): pickling a numpy
+    array costs ~7 us however small it is, ~25 us between env steps, its bytes a quarter of
+    that. ``actions``: an env's action size, whose rows also hold the reward, action and
+    success (0: a World's)."""
 
     def __init__(self, files: Writer, path: Path, recording_id: str, layout: int, world,
                  index: int, options: _Options, actions: int = 0):

@@ -17,8 +17,8 @@ Messages are tuples, handed over in pickled lists on the writer's standard input
 - ``("layout", key, scene, application_id, blueprint)``: what files of ``scene`` share, built
   once (``_Layout``); blueprint: the ``_blueprint`` arguments (eye, target, scalars, grid).
 - ``("open", path, recording_id, key, statics, contacts)``: start a file (path: a str, as
-  in every message about a file); statics: {body
-  index: (position (3,) m, orientation (4,) w, x, y, z)} of the static bodies, as tuples.
+  in every message about a file); statics: {body index: (position (3,) m, orientation (4,)
+  w, x, y, z)} of the static bodies, as tuples.
 - ``("markers", path, markers)``: goal markers, (shape, position, orientation, RGBA) each
   (``_File.markers``).
 - ``("action_names", path, names)``.
@@ -325,9 +325,10 @@ class _File:
                 self.layout.entities[body], indexes,
                 rr.Transform3D.columns(translation=position[:, body],
                                        quaternion=xyzw[:, body])))
-        stepped = rows[steps > 0, scalars:]
+        after_reset = steps > 0
+        stepped = rows[after_reset, scalars:]
         if stepped.shape[1] and len(stepped):
-            indexes = _indexes(steps[steps > 0], times[steps > 0])
+            indexes = _indexes(steps[after_reset], times[after_reset])
             action = stepped[:, 2:]
             self.chunks += [
                 Chunk.from_columns("reward", indexes, rr.Scalars.columns(scalars=stepped[:, 0])),

@@ -91,11 +91,7 @@ def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, gr
             count = 0
             pairs.reach[w] = 0.0
             if c.broad_phase:
-                count = find_world_pairs(s.position[w], s.rotation[w], s.velocity[w],
-                                         s.angular_velocity[w], m.motion, geo, 0.0, dt,
-                                         c.gravity, c.sweep, pairs.bounds[w], pairs.order[w],
-                                         pairs.pair_a[w], pairs.pair_b[w], pairs.keys[w],
-                                         pairs.tmp[w], pairs.reach[w])
+                count = list_pairs(w, dt, c.gravity, s, m, geo, pairs, c)
             pairs.pair_count[w] = count
             if count > capacity:
                 return done
@@ -109,11 +105,7 @@ def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, gr
                     if not outgrown(w, dt, s, geo, pairs.reach[w]):
                         break
                     count = pairs.pair_count[w]
-                    more = find_world_pairs(s.position[w], s.rotation[w], s.velocity[w],
-                                            s.angular_velocity[w], m.motion, geo, 0.0, dt,
-                                            0.0, c.sweep, pairs.bounds[w],
-                                            pairs.order[w], pairs.pair_a[w], pairs.pair_b[w],
-                                            pairs.keys[w], pairs.tmp[w], pairs.reach[w])
+                    more = list_pairs(w, dt, 0.0, s, m, geo, pairs, c)  # the final velocities
                     if more == count:  # boxes only grow: the same count is the same pairs
                         break
                     pairs.pair_count[w] = more
@@ -134,6 +126,16 @@ def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, gr
                        s.angular_velocity, s.rotation, a.parent, a.offset_position,
                        a.offset_orientation)
     return steps
+
+
+@kernel(inline=True)
+def list_pairs(w, dt, acceleration, s, m, geo, pairs, c):
+    """World w's pairs for its current poses and velocities (``find_world_pairs``), boxes
+    grown by at least pairs.reach[w]; returns how many."""
+    return find_world_pairs(s.position[w], s.rotation[w], s.velocity[w], s.angular_velocity[w],
+                            m.motion, geo, 0.0, dt, acceleration, c.sweep, pairs.bounds[w],
+                            pairs.order[w], pairs.pair_a[w], pairs.pair_b[w], pairs.keys[w],
+                            pairs.tmp[w], pairs.reach[w])
 
 
 @kernel(inline=True)
