@@ -72,11 +72,12 @@ PATCH_COS = 0.95
 
 Scratch = namedtuple("Scratch", "position quaternion rotation point normal depth group partner "
                                 "source orient k box directions wrench system rhs solution work "
-                                "lookahead")
+                                "lookahead pairs_of")
 """Work arrays of the impulse phases, each with a leading world axis B: predicted poses
 (B, n, 3), (B, n, 4), (B, n, 3, 3); contacts (B, C, 3), (B, C, 3), (B, C) with their patch and
 partner bookkeeping (B, C) int64 / float64; a 3x3 matrix; box-clipping space (B, 3, 16, 3);
-the patch solve's directions, 6x6 systems and vectors; the prediction's extra shift (B, 3).
+the patch solve's directions, 6x6 systems and vectors; the prediction's extra shift (B, 3);
+each body's number of listed pairs (B, n) int64.
 C is the contact capacity the Scratch was made for. ``world_scratch`` takes one world's rows."""
 
 SCRATCH_SHAPES = (("position", ("n", 3), np.float64), ("quaternion", ("n", 4), np.float64),
@@ -88,7 +89,7 @@ SCRATCH_SHAPES = (("position", ("n", 3), np.float64), ("quaternion", ("n", 4), n
                   ("directions", (3, 3), np.float64), ("wrench", (6, 6), np.float64),
                   ("system", (6, 6), np.float64), ("rhs", (6,), np.float64),
                   ("solution", (6,), np.float64), ("work", (2, 3, 3), np.float64),
-                  ("lookahead", (3,), np.float64))
+                  ("lookahead", (3,), np.float64), ("pairs_of", ("n",), np.int64))
 """Per-world shape of each Scratch field ("n": bodies, "c": contact capacity) and dtype."""
 
 
@@ -98,7 +99,7 @@ def world_scratch(s, w):
     return Scratch(s.position[w], s.quaternion[w], s.rotation[w], s.point[w], s.normal[w],
                    s.depth[w], s.group[w], s.partner[w], s.source[w], s.orient[w], s.k[w],
                    s.box[w], s.directions[w], s.wrench[w], s.system[w], s.rhs[w], s.solution[w],
-                   s.work[w], s.lookahead[w])
+                   s.work[w], s.lookahead[w], s.pairs_of[w])
 
 
 @kernel(inline=True)
@@ -383,20 +384,53 @@ def resolve_world_contacts(state, model, geo, w, pair_a, pair_b, pairs, accumula
     """The collision (mode COLLISION) or contact (mode CONTACT) phase for world w: up to
     ``passes`` sweeps over its ``pairs`` candidate pairs (pair_a, pair_b (P,) int32), stopping
     early when a sweep applies no impulse. accumulated (P, 3): each pair's impulse on its body
-    a in this step, N s (added to here); scratch: the batched Scratch."""
+    a in this step, N s (added to here); scratch: the batched Scratch.
+
+    In the contact phase, a pair whose movable bodies are in no other pair (``alone``: a cube
+    on the table, two boxes meeting in the air) skips the restitution ramp: the ramp shares
+    impulses out among contacts that disturb each other, and such a pair disturbs nothing, so
+    its early passes would only scale its own approach down before the last pass (e = 0)
+    stops it. Its passes run at e = 0 once the other pairs' passes are done (they share no
+    movable body, so the order between the two does not matter), until one applies nothing.
+    """
     scratch = world_scratch(scratch, w)
     for c in range(3):
         scratch.lookahead[c] = dt * dt * model.gravity[c] if mode == COLLISION else 0.0
-    for p in range(passes):
-        ramp_e = CONTACT_RESTITUTION_START * (1.0 - (p + 1.0) / passes)
-        applied = 0
-        for k in range(pairs):
-            a, b = pair_a[k], pair_b[k]
-            applied += resolve_pair(state, model, geo, w, k, a, b, dt, scratch.lookahead, mode,
-                                    ramp_e, model.motion[a] == DYNAMIC,
-                                    model.motion[b] == DYNAMIC, scratch, accumulated)
-        if applied == 0:
-            break
+    ramp = mode == CONTACT
+    if ramp:
+        count_pairs_of_bodies(pair_a, pair_b, pairs, scratch.pairs_of)
+    for group in range(2 if ramp else 1):  # with the ramp: the other pairs, then those alone
+        for p in range(passes):
+            ramp_e = CONTACT_RESTITUTION_START * (1.0 - (p + 1.0) / passes) if group == 0 else 0.0
+            applied = 0
+            for k in range(pairs):
+                a, b = pair_a[k], pair_b[k]
+                if ramp and alone(model, a, b, scratch.pairs_of) != (group == 1):
+                    continue
+                applied += resolve_pair(state, model, geo, w, k, a, b, dt, scratch.lookahead,
+                                        mode, ramp_e, model.motion[a] == DYNAMIC,
+                                        model.motion[b] == DYNAMIC, scratch, accumulated)
+            if applied == 0:
+                break
+
+
+@kernel
+def count_pairs_of_bodies(pair_a, pair_b, pairs, pairs_of):
+    """pairs_of (n,) int64: in how many of the ``pairs`` listed pairs each body is."""
+    for i in range(pairs_of.shape[0]):
+        pairs_of[i] = 0
+    for k in range(pairs):
+        pairs_of[pair_a[k]] += 1
+        pairs_of[pair_b[k]] += 1
+
+
+@kernel(inline=True)
+def alone(model, a, b, pairs_of):
+    """Is the pair (a, b) the only pair of each of its dynamic bodies? (pairs_of: see
+    ``count_pairs_of_bodies``; static and kinematic bodies take no impulse, so the pairs
+    they share carry nothing from one to another.)"""
+    return ((model.motion[a] != DYNAMIC or pairs_of[a] == 1)
+            and (model.motion[b] != DYNAMIC or pairs_of[b] == 1))
 
 
 Graph = namedtuple("Graph", "touching edge_from edge_to edge_start targets component "
