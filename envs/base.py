@@ -181,10 +181,10 @@ class RigidGymEnv(gym.Env):
         if action.shape != self.action_space.shape:
             raise ValueError(f"{type(self).__name__}.step: action must have shape "
                              f"{self.action_space.shape}, got {action.shape}")
-        if not np.all(np.isfinite(action)):
+        if not np.isfinite(action).all():
             raise ValueError(f"{type(self).__name__}.step: action must be finite (NaN and inf "
                              f"are refused), got {action.tolist()}")
-        action = np.clip(action, -1.0, 1.0)  # documented: outside [-1, 1] is clipped
+        action = np.minimum(np.maximum(action, -1.0), 1.0)  # documented: outside [-1, 1] is clipped
         self.gripper.command(action[:3], action[3] if self.has_grip else None)
 
     def outcome(self):
@@ -238,7 +238,7 @@ class RigidGymEnv(gym.Env):
     def _observation_from(self, vector: np.ndarray, achieved: np.ndarray) -> dict:
         """The observation dict from ``observe``'s rows for this env: checked finite, noise
         added (``observation_noise``, from this env's np_random)."""
-        if not np.all(np.isfinite(vector)):  # a solver failure: say so here, not in a network
+        if not np.isfinite(vector).all():  # a solver failure: say so here, not in a network
             bad = np.flatnonzero(~np.isfinite(vector)).tolist()
             raise RuntimeError(f"{type(self).__name__}: the simulation produced non-finite "
                                f"state (observation entries {bad}) at t = {self.world.time:.3f} s")

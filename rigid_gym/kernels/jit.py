@@ -43,3 +43,12 @@ def kernel(fn=None, *, parallel: bool = False, allocates: bool = False, inline: 
 
 
 prange = numba.prange
+
+
+def compiled_entry(dispatcher, *args):
+    """The compiled code of kernel ``dispatcher`` for the types of ``args`` (compiled, or
+    loaded from the cache, if it is not yet), to be called with arguments of exactly these
+    types again and again: a call through it skips numba's dispatch, which works out the type
+    of every argument at every call. For the step's namedtuples of ~110 arrays that was
+    ~10 us of a ~13 us call (measured). The entry does not check the types it is given."""
+    return dispatcher.compile(tuple(dispatcher.typeof_pyval(a) for a in args))
