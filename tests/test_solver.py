@@ -122,6 +122,20 @@ def test_equal_spheres_head_on_elastic_swap_velocities():
     assert world.kinetic_energy() == pytest.approx(e0, rel=1e-12)
 
 
+def test_unequal_spheres_head_on_inelastic_move_on_together():
+    """e = 0, masses 1 and 3 kg, no gravity: the pair is alone (no other pair shares a body),
+    so its contact passes run at e = 0 without the ramp; they end at the momentum-weighted
+    velocity (1 * 2 + 3 * -1) / 4 = -0.25 m/s, and momentum is kept to round-off."""
+    scene = rg.Scene(gravity=(0, 0, 0))
+    scene.add_body(rg.Sphere(0.1), mass=1.0, velocity=(2, 0, 0))
+    scene.add_body(rg.Sphere(0.1), mass=3.0, position=(0.5, 0, 0), velocity=(-1, 0, 0))
+    world = rg.World(scene, dt=1 / 240)
+    world.step(100)
+    np.testing.assert_allclose(world.velocity[:, 0], [-0.25, -0.25], atol=1e-12)
+    assert 1.0 * world.velocity[0, 0] + 3.0 * world.velocity[1, 0] == pytest.approx(-1.0,
+                                                                                 abs=1e-12)
+
+
 def test_ten_cube_stack_stands_still():
     """Edge 0.1 m, mu 0.5, dt 1/240, 10 s: top cube moves < 1 mm, penetration < 2% of the edge
     (measured: 0 m and 1e-16 m)."""
