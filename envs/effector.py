@@ -42,7 +42,9 @@ class Workspace:
     high: tuple[float, float, float] = (0.25, 0.25, 0.3)
 
     def clip(self, position: np.ndarray) -> np.ndarray:
-        return np.minimum(np.maximum(position, self.low), self.high)  # np.clip's checks: 3x
+        """position (..., 3) m, each axis clipped to [low, high] (without np.clip's
+        argument checks, ~3x the cost on a 3-vector)."""
+        return np.minimum(np.maximum(position, self.low), self.high)
 
 
 class SuctionGripper:
@@ -123,10 +125,10 @@ def command_all(world, grippers: list[SuctionGripper], motions: np.ndarray,
     motions (B, 3) in [-1, 1], grips (B,) or None (tasks without a grip). The grippers drive
     the same body and boxes in every world (a vector env's copies), and share a workspace."""
     first = grippers[0]
-    body, low, high = first.body, first.workspace.low, first.workspace.high
+    body = first.body
     s = world.state
     position = s.position[:, body]
-    target = np.minimum(np.maximum(position + STEP_DISTANCE * motions, low), high)
+    target = first.workspace.clip(position + STEP_DISTANCE * motions)
     lowest = np.empty(len(grippers))
     _lowest_centres(grippers, target, s.position, s.rotation, lowest)
     target[:, 2] = np.maximum(target[:, 2], np.minimum(position[:, 2], lowest))

@@ -53,10 +53,10 @@ file's rows (~30 bytes per moving body and step) until the file ends.
 exception propagates), and when the process exits (an ``atexit`` hook hands over any open
 file and waits for the writer); a process killed outright loses only the rows it had not
 handed over (a writer killed outright loses the files it had not finished). Files of
-finished episodes are written in the background: ``sync()`` waits for them. Nothing is made until an episode starts, so the wrappers can be built inside
-SubprocVecEnv workers (each worker has its own writer and files; the default run name contains
-the process id). ``RERUN=off`` in the environment turns recording off: nothing is written and
-nothing fails.
+finished episodes are written in the background: ``sync()`` waits for them. Nothing is made
+until an episode starts, so the wrappers can be built inside SubprocVecEnv workers (each
+worker has its own writer and files; the default run name contains the process id).
+``RERUN=off`` in the environment turns recording off: nothing is written and nothing fails.
 """
 
 from __future__ import annotations
