@@ -1,8 +1,13 @@
-"""Broad phase: which pairs of bodies might touch, from world-space bounding boxes.
+"""Broad phase: which pairs of bodies might touch, from bounding boxes.
 
-Bounded bodies are tested with each other by brute force (all pairs, O(n^2)) or by sort and
-sweep along x (O(n log n) plus the overlaps); unbounded bodies (planes) are tested against
-every bounded body's box. Both methods return the same pairs in the same order: sorted by
+Every bounded body has a box in its own frame (``Geometry.body_bound_*``), grown on every side
+by how far the body can move in the step. Bounded bodies are paired by the world-aligned boxes
+holding those boxes, by brute force (all pairs, O(n^2)) or by sort and sweep along x
+(O(n log n) plus the overlaps), and a pair whose world-aligned boxes overlap is kept only if
+the turned boxes themselves overlap (separating axes): for turned boxes the world-aligned
+ones are up to sqrt(3) times as wide, and in a settled pile of turned boxes two thirds of the
+pairs they listed did not touch, each narrow-phased in every contact pass. Unbounded bodies
+(planes) are tested against every bounded body's world-aligned box. Both methods return the same pairs in the same order: sorted by
 (a, b), with a the body of higher motion class (dynamic > kinematic > static; ties: the lower
 index), so contact normals point from the ground or gripper towards what they touch.
 Pairs in which neither body is dynamic are skipped: nothing could respond.
@@ -44,6 +49,68 @@ def boxes_overlap(bounds, i, j):
     for k in range(3):
         if bounds[i, k] > bounds[j, 3 + k] or bounds[j, k] > bounds[i, 3 + k]:
             return False
+    return True
+
+
+BOX_AXIS_SLACK = 1e-9
+"""Added to |cos| between two boxes' axes in the separating-axis test: for nearly parallel
+edges the cross-product axis is nearly zero and its projections are round-off, which must not
+separate the boxes (Ericson, Real-Time Collision Detection, 4.4.1)."""
+
+
+@kernel
+def axis_cosine(ra, rb, k, l):
+    """Cosine between axis k of frame ra and axis l of frame rb (3, 3 rotations: columns)."""
+    return ra[0, k] * rb[0, l] + ra[1, k] * rb[1, l] + ra[2, k] * rb[2, l]
+
+
+@kernel
+def turned_boxes_overlap(position, rotation, geo, reach, i, j):
+    """Do bodies i and j's boxes (their own frames' bound boxes, each grown by reach[i] m on
+    every side) overlap? Separating axes: the 3 face normals of each box and the 9 cross
+    products of their edges (Gottschalk, Lin & Manocha 1996; Ericson 4.4.1). position (n, 3),
+    rotation (n, 3, 3): the bodies' poses; reach (n,) m."""
+    ra, rb = rotation[i], rotation[j]
+    ci, cj = geo.body_bound_center[i], geo.body_bound_center[j]
+    ea = (geo.body_bound_half[i, 0] + reach[i], geo.body_bound_half[i, 1] + reach[i],
+          geo.body_bound_half[i, 2] + reach[i])
+    eb = (geo.body_bound_half[j, 0] + reach[j], geo.body_bound_half[j, 1] + reach[j],
+          geo.body_bound_half[j, 2] + reach[j])
+    # centre of j's box minus centre of i's, in i's frame
+    t0 = t1 = t2 = 0.0
+    for k in range(3):
+        d = (position[j, k] + rb[k, 0] * cj[0] + rb[k, 1] * cj[1] + rb[k, 2] * cj[2]
+             - position[i, k] - ra[k, 0] * ci[0] - ra[k, 1] * ci[1] - ra[k, 2] * ci[2])
+        t0 += ra[k, 0] * d
+        t1 += ra[k, 1] * d
+        t2 += ra[k, 2] * d
+    t = (t0, t1, t2)
+    for k in range(3):  # i's face normals
+        extent = ea[k]
+        for l in range(3):
+            extent += eb[l] * (abs(axis_cosine(ra, rb, k, l)) + BOX_AXIS_SLACK)
+        if abs(t[k]) > extent:
+            return False
+    for l in range(3):  # j's face normals
+        extent = eb[l]
+        along = 0.0
+        for k in range(3):
+            cosine = axis_cosine(ra, rb, k, l)
+            extent += ea[k] * (abs(cosine) + BOX_AXIS_SLACK)
+            along += t[k] * cosine
+        if abs(along) > extent:
+            return False
+    for k in range(3):  # i's edge k crossed with j's edge l
+        k1, k2 = (k + 1) % 3, (k + 2) % 3
+        for l in range(3):
+            l1, l2 = (l + 1) % 3, (l + 2) % 3
+            extent = (ea[k1] * (abs(axis_cosine(ra, rb, k2, l)) + BOX_AXIS_SLACK)
+                      + ea[k2] * (abs(axis_cosine(ra, rb, k1, l)) + BOX_AXIS_SLACK)
+                      + eb[l1] * (abs(axis_cosine(ra, rb, k, l2)) + BOX_AXIS_SLACK)
+                      + eb[l2] * (abs(axis_cosine(ra, rb, k, l1)) + BOX_AXIS_SLACK))
+            along = t[k2] * axis_cosine(ra, rb, k1, l) - t[k1] * axis_cosine(ra, rb, k2, l)
+            if abs(along) > extent:
+                return False
     return True
 
 
@@ -167,14 +234,16 @@ def find_world_pairs(position, rotation, velocity, angular_velocity, motion, geo
                     continue
                 if bounds[j, 0] > bounds[i, 3]:
                     break
-                if boxes_overlap(bounds, i, j):
+                if boxes_overlap(bounds, i, j) and turned_boxes_overlap(position, rotation, geo,
+                                                                         reach, i, j):
                     count = add_pair(i, j, motion, pair_a, pair_b, count)
     else:
         for i in range(n):
             if unbounded[i] != 0:
                 continue
             for j in range(i + 1, n):
-                if unbounded[j] == 0 and boxes_overlap(bounds, i, j):
+                if (unbounded[j] == 0 and boxes_overlap(bounds, i, j)
+                        and turned_boxes_overlap(position, rotation, geo, reach, i, j)):
                     count = add_pair(i, j, motion, pair_a, pair_b, count)
     if count <= pair_a.shape[0]:
         sort_pairs(pair_a, pair_b, count, n, keys, tmp)

@@ -165,59 +165,72 @@ def collide_cores(geo, ga, gb, xa, ra, xb, rb, margin, points, normals, depths, 
 def core_contact(geo, gc, xc, rc, gf, xf, rf, t, sign, margin, points, normals, depths, index,
                  capacity):
     """The point at parameter t of sphere/capsule geom gc's core in the phi of geom gf: writes a
-    contact at ``index`` if it is one. Returns (contacts written, 0 or 1; phi there, m)."""
+    contact at ``index`` if it is one. Returns (contacts written, 0 or 1; phi there, m; phi's
+    gradient there, gf's outward normal in world coordinates)."""
     radius = geo.geom_size[gc, 0]
     cx, cy, cz = core_point(geo, gc, xc, rc, t)
     phi, nx, ny, nz = world_point_in_geom(geo, gf, xf, rf, cx, cy, cz, radius + margin)
     depth = radius - phi
     if depth <= -margin:
-        return 0, phi
+        return 0, phi, nx, ny, nz
     emit(points, normals, depths, index, capacity, cx - radius * nx, cy - radius * ny,
          cz - radius * nz, sign * nx, sign * ny, sign * nz, depth)
-    return 1, phi
+    return 1, phi, nx, ny, nz
 
 
 @kernel
-def core_phi(geo, gc, xc, rc, gf, xf, rf, t, reach):
-    """phi of geom gf at the point of parameter t on geom gc's core, m."""
-    cx, cy, cz = core_point(geo, gc, xc, rc, t)
-    return world_point_in_geom(geo, gf, xf, rf, cx, cy, cz, reach)[0]
-
-
-@kernel
-def core_minimum(geo, gc, xc, rc, gf, xf, rf, reach, lo, hi):
-    """Golden-section search for the t in [lo, hi] where phi along gc's core is least: the
-    global minimum where phi is convex along the core (a box's), a local one otherwise.
-    Returns (t, phi)."""
-    ratio = 0.6180339887498949
-    c = hi - ratio * (hi - lo)
-    d = lo + ratio * (hi - lo)
-    fc = core_phi(geo, gc, xc, rc, gf, xf, rf, c, reach)
-    fd = core_phi(geo, gc, xc, rc, gf, xf, rf, d, reach)
-    for _ in range(CORE_SEARCH_ITERATIONS):
-        if fc <= fd:
-            hi, d, fd = d, c, fc
-            c = hi - ratio * (hi - lo)
-            fc = core_phi(geo, gc, xc, rc, gf, xf, rf, c, reach)
-        else:
-            lo, c, fc = c, d, fd
-            d = lo + ratio * (hi - lo)
-            fd = core_phi(geo, gc, xc, rc, gf, xf, rf, d, reach)
-    if fc <= fd:
-        return c, fc
-    return d, fd
-
-
-@kernel
-def core_range_near_grid(geo, gc, xc, rc, gf, xf, rf, reach):
-    """The parameters (t0, t1) of the part of capsule gc's core within ``reach`` (m) of mesh
-    gf's grid box (slab clipping in the mesh's frame); t0 > t1 when there is none."""
+def core_in_geom_frame(geo, gc, xc, rc, gf, xf, rf):
+    """The ends (t = -1, t = 1) of sphere/capsule geom gc's core (pose xc, rc) in the frame of
+    geom gf (pose xf, rf); returns a 6-tuple, m."""
     ax, ay, az = core_point(geo, gc, xc, rc, -1.0)
     bx, by, bz = core_point(geo, gc, xc, rc, 1.0)
     ax, ay, az = to_local(xf, rf, ax, ay, az)
     ax, ay, az = to_local(geo.geom_position[gf], geo.geom_rotation[gf], ax, ay, az)
     bx, by, bz = to_local(xf, rf, bx, by, bz)
     bx, by, bz = to_local(geo.geom_position[gf], geo.geom_rotation[gf], bx, by, bz)
+    return ax, ay, az, bx, by, bz
+
+
+@kernel
+def core_phi(geo, gf, ends, t, reach):
+    """phi of geom gf at the point of parameter t in [-1, 1] of a core whose ends are ``ends``
+    (``core_in_geom_frame``), m."""
+    ax, ay, az, bx, by, bz = ends
+    s = 0.5 * (t + 1.0)
+    return geom_distance_within(geo, gf, ax + s * (bx - ax), ay + s * (by - ay),
+                                az + s * (bz - az), reach)[0]
+
+
+@kernel
+def core_minimum(geo, gf, ends, reach, lo, hi):
+    """Golden-section search for the t in [lo, hi] where phi of geom gf along a core (ends in
+    gf's frame: ``core_in_geom_frame``) is least: the global minimum where phi is convex
+    along the core (a box's), a local one otherwise. Returns (t, phi)."""
+    ratio = 0.6180339887498949
+    c = hi - ratio * (hi - lo)
+    d = lo + ratio * (hi - lo)
+    fc = core_phi(geo, gf, ends, c, reach)
+    fd = core_phi(geo, gf, ends, d, reach)
+    for _ in range(CORE_SEARCH_ITERATIONS):
+        if fc <= fd:
+            hi, d, fd = d, c, fc
+            c = hi - ratio * (hi - lo)
+            fc = core_phi(geo, gf, ends, c, reach)
+        else:
+            lo, c, fc = c, d, fd
+            d = lo + ratio * (hi - lo)
+            fd = core_phi(geo, gf, ends, d, reach)
+    if fc <= fd:
+        return c, fc
+    return d, fd
+
+
+@kernel
+def core_range_near_grid(geo, gf, ends, reach):
+    """The parameters (t0, t1) of the part of a core (ends in mesh geom gf's frame:
+    ``core_in_geom_frame``) within ``reach`` (m) of gf's grid box (slab clipping); t0 > t1
+    when there is none."""
+    ax, ay, az, bx, by, bz = ends
     m = geo.geom_grid[gf]
     h = geo.grid_spacing[m]
     s0, s1 = 0.0, 1.0
@@ -247,22 +260,34 @@ def collide_core_with_field(geo, gc, xc, rc, gf, xf, rf, sign, margin, points, n
     if geo.geom_type[gc] != CAPSULE:
         return core_contact(geo, gc, xc, rc, gf, xf, rf, 0.0, sign, margin, points, normals,
                             depths, index, capacity)[0]
-    found, phi_lo = core_contact(geo, gc, xc, rc, gf, xf, rf, -1.0, sign, margin, points,
-                                 normals, depths, index, capacity)
-    hit, phi_hi = core_contact(geo, gc, xc, rc, gf, xf, rf, 1.0, sign, margin, points, normals,
-                               depths, index + found, capacity)
+    found, phi_lo, nx_lo, ny_lo, nz_lo = core_contact(geo, gc, xc, rc, gf, xf, rf, -1.0, sign,
+                                                      margin, points, normals, depths, index,
+                                                      capacity)
+    hit, phi_hi, nx_hi, ny_hi, nz_hi = core_contact(geo, gc, xc, rc, gf, xf, rf, 1.0, sign,
+                                                    margin, points, normals, depths,
+                                                    index + found, capacity)
     found += hit
     if geo.geom_type[gf] == PLANE:
         return found
     reach = geo.geom_size[gc, 0] + margin
     if geo.geom_type[gf] == BOX:
-        t, phi = core_minimum(geo, gc, xc, rc, gf, xf, rf, reach, -1.0, 1.0)
+        # a box's phi is convex, so along the core it falls below both ends' values only if
+        # it falls inwards from each end; the gradient at an end (a subgradient where phi
+        # has a ridge) bounds that slope from below: where it does not fall, an end is least
+        gr = geo.geom_rotation[gc]
+        ux, uy, uz = rotate(rc, gr[0, 2], gr[1, 2], gr[2, 2])  # the core's axis, t = -1 to 1
+        if (nx_lo * ux + ny_lo * uy + nz_lo * uz >= 0.0
+                or nx_hi * ux + ny_hi * uy + nz_hi * uz <= 0.0):
+            return found
+        t, phi = core_minimum(geo, gf, core_in_geom_frame(geo, gc, xc, rc, gf, xf, rf), reach,
+                              -1.0, 1.0)
         if phi < min(phi_lo, phi_hi) - CORE_MINIMUM_TOLERANCE and phi < reach:
             found += core_contact(geo, gc, xc, rc, gf, xf, rf, t, sign, margin, points, normals,
                                   depths, index + found, capacity)[0]
         return found
     # a mesh: local minima of phi sampled at most a grid cell apart along the core near the grid
-    t0, t1 = core_range_near_grid(geo, gc, xc, rc, gf, xf, rf, reach)
+    ends = core_in_geom_frame(geo, gc, xc, rc, gf, xf, rf)
+    t0, t1 = core_range_near_grid(geo, gf, ends, reach)
     if t0 >= t1:
         return found
     length = (t1 - t0) * geo.geom_size[gc, 1]
@@ -270,12 +295,12 @@ def collide_core_with_field(geo, gc, xc, rc, gf, xf, rf, sign, margin, points, n
                 CORE_MAX_SAMPLES)
     step = (t1 - t0) / count
     interior = 0
-    before = core_phi(geo, gc, xc, rc, gf, xf, rf, t0, reach)
-    here = core_phi(geo, gc, xc, rc, gf, xf, rf, t0 + step, reach)
+    before = core_phi(geo, gf, ends, t0, reach)
+    here = core_phi(geo, gf, ends, t0 + step, reach)
     for k in range(1, count):
-        after = core_phi(geo, gc, xc, rc, gf, xf, rf, t0 + (k + 1) * step, reach)
+        after = core_phi(geo, gf, ends, t0 + (k + 1) * step, reach)
         if here < before and here <= after and here < reach:
-            t, phi = core_minimum(geo, gc, xc, rc, gf, xf, rf, reach, t0 + (k - 1) * step,
+            t, phi = core_minimum(geo, gf, ends, reach, t0 + (k - 1) * step,
                                   t0 + (k + 1) * step)
             if phi < min(before, after) - CORE_MINIMUM_TOLERANCE and phi < reach:
                 # keep the deepest CAPSULE_CORE_SAMPLES - 2: replace the shallowest if full
