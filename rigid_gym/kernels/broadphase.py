@@ -4,13 +4,14 @@ Every bounded body has a box in its own frame (``Geometry.body_bound_*``), grown
 by how far the body can move in the step. Bounded bodies are paired by the world-aligned boxes
 holding those boxes, by brute force (all pairs, O(n^2)) or by sort and sweep along x
 (O(n log n) plus the overlaps), and a pair whose world-aligned boxes overlap is kept only if
-the turned boxes themselves overlap (separating axes): for turned boxes the world-aligned
-ones are up to sqrt(3) times as wide, and in a settled pile of turned boxes two thirds of the
-pairs they listed did not touch, each narrow-phased in every contact pass. Unbounded bodies
-(planes) are tested against every bounded body's world-aligned box. Both methods return the same pairs in the same order: sorted by
-(a, b), with a the body of higher motion class (dynamic > kinematic > static; ties: the lower
-index), so contact normals point from the ground or gripper towards what they touch.
-Pairs in which neither body is dynamic are skipped: nothing could respond.
+the turned boxes themselves overlap (separating axes): a turned box's world-aligned box is up
+to sqrt(3) times as wide, and every pair listed is narrow-phased in every contact pass (the
+settled 1000-body pile of ``report.scenes``: 5,336 pairs by world-aligned boxes, 3,478 by
+turned ones). Unbounded bodies (planes) are tested against every bounded body's world-aligned
+box. Both methods return the same pairs in the same order: sorted by (a, b), with a the body
+of higher motion class (dynamic > kinematic > static; ties: the lower index), so contact
+normals point from the ground or gripper towards what they touch. Pairs in which neither body
+is dynamic are skipped: nothing could respond.
 """
 
 import numpy as np
