@@ -233,22 +233,8 @@ class RigidGymEnv(gym.Env):
         held = None if not self.has_grip else np.array([self.gripper.held is not None])
         vectors, achieved = observe(w.position[None], w.velocity[None], w.rotation[None],
                                     w.angular_velocity[None], self.gripper.body, self.cubes, held)
-        return self._observation_from(vectors[0], achieved[0])
-
-    def _observation_from(self, vector: np.ndarray, achieved: np.ndarray) -> dict:
-        """The observation dict from ``observe``'s rows for this env: checked finite, noise
-        added (``observation_noise``, from this env's np_random)."""
-        if not np.isfinite(vector).all():  # a solver failure: say so here, not in a network
-            bad = np.flatnonzero(~np.isfinite(vector)).tolist()
-            raise RuntimeError(f"{type(self).__name__}: the simulation produced non-finite "
-                               f"state (observation entries {bad}) at t = {self.world.time:.3f} s")
-        if self.observation_noise > 0.0:
-            vector = vector + self.np_random.normal(0.0, self.observation_noise, vector.shape)
-        return {
-            "observation": vector.astype(np.float32),
-            "achieved_goal": achieved.astype(np.float32),
-            "desired_goal": self.goal.astype(np.float32),
-        }
+        batch = observations_from([self], vectors, achieved, self.goal[None], w.time)
+        return {key: value[0] for key, value in batch.items()}
 
     def _is_success(self, observation: dict) -> bool:
         """Judged on the observed (float32) goals, exactly as ``compute_reward`` sees them."""
@@ -302,6 +288,31 @@ def observe(position, velocity, rotation, angular_velocity, gripper: int, cubes,
         parts += [cube, cube - pad, axes, velocity[:, body], angular_velocity[:, body]]
     achieved = np.concatenate([position[:, body] for body in cubes], axis=1)
     return np.concatenate(parts, axis=1), achieved
+
+
+def observations_from(envs, vectors: np.ndarray, achieved: np.ndarray, goals: np.ndarray,
+                      time: float) -> dict:
+    """The observation dict of B envs of one task (``envs``, in the order of the rows) from
+    ``observe``'s rows (vectors (B, size), achieved (B, goal_size)) and their goals (B,
+    goal_size), float64: rows checked finite, noise added (each env's ``observation_noise``
+    from its own np_random, as one env alone would draw it), all cast to float32 (B, ...)
+    arrays. ``time``: the worlds' simulated time, s (for the error message)."""
+    finite = np.isfinite(vectors).all(axis=1)
+    if not finite.all():  # a solver failure: say so here, not in a network
+        copy = int(np.flatnonzero(~finite)[0])
+        bad = np.flatnonzero(~np.isfinite(vectors[copy])).tolist()
+        which = f" (copy {copy})" if len(envs) > 1 else ""
+        raise RuntimeError(f"{type(envs[copy]).__name__}{which}: the simulation produced "
+                           f"non-finite state (observation entries {bad}) at t = {time:.3f} s")
+    if envs[0].observation_noise > 0.0:
+        noise = envs[0].observation_noise
+        vectors = vectors + np.stack([env.np_random.normal(0.0, noise, vectors.shape[1])
+                                      for env in envs])
+    return {
+        "observation": vectors.astype(np.float32),
+        "achieved_goal": achieved.astype(np.float32),
+        "desired_goal": goals.astype(np.float32),
+    }
 
 
 def _randomization_ranges(randomize, where: str) -> dict:

@@ -20,7 +20,13 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from rigid_gym.envs.base import SOLVER_STEPS, STEP_TIME, RigidGymEnv, observe
+from rigid_gym.envs.base import (
+    SOLVER_STEPS,
+    STEP_TIME,
+    RigidGymEnv,
+    observations_from,
+    observe,
+)
 from rigid_gym.envs.effector import command_all
 from rigid_gym.envs.push import PushEnv
 from rigid_gym.envs.stack import StackEnv
@@ -68,6 +74,8 @@ class RigidGymVectorEnv(VectorEnv):
         self.observation_space = batch_space(first.observation_space, self.num_envs)
         self.action_space = batch_space(first.action_space, self.num_envs)
         self.elapsed = np.zeros(self.num_envs, dtype=np.int64)
+        self.goals = np.zeros((self.num_envs, first.goal_size))
+        """Every copy's goal (B, goal_size), kept as each copy resets."""
 
     def reset(self, *, seed: int | list | None = None, options: dict | None = None):
         """Reset every copy; ``seed``: None, an int (copy i gets seed + i) or one per copy."""
@@ -81,10 +89,12 @@ class RigidGymVectorEnv(VectorEnv):
         observations, infos = [], {}
         for i, env in enumerate(self.envs):
             observation, info = env.reset(seed=seeds[i], options=options)
+            self.goals[i] = env.goal
             observations.append(observation)
             infos = self._add_info(infos, info, i)
         self.elapsed[:] = 0
-        return self._stack(observations), infos
+        return {key: np.stack([o[key] for o in observations])
+                for key in self.single_observation_space.spaces}, infos
 
     def step(self, actions):
         actions = np.asarray(actions, dtype=np.float64)
@@ -106,28 +116,31 @@ class RigidGymVectorEnv(VectorEnv):
         infos = {}
         for i in np.flatnonzero(terminated | truncated):
             final_info = {"is_success": bool(successes[i])}
-            infos = self._add_info(infos, {"final_obs": observations[i],
-                                           "final_info": final_info}, i)
-            observations[i], reset_info = self.envs[i].reset()
+            final_obs = {key: value[i].copy() for key, value in observations.items()}
+            infos = self._add_info(infos, {"final_obs": final_obs, "final_info": final_info}, i)
+            observation, reset_info = self.envs[i].reset()
+            self.goals[i] = self.envs[i].goal
+            for key, value in observation.items():
+                observations[key][i] = value
             successes[i] = reset_info["is_success"]
             self.elapsed[i] = 0
         infos["is_success"] = successes  # every copy's, as _add_info would batch them
         infos["_is_success"] = np.ones(self.num_envs, dtype=bool)
-        return self._stack(observations), rewards, terminated, truncated, infos
+        return observations, rewards, terminated, truncated, infos
 
     def _outcomes(self):
-        """Every copy's step result at once: observations (list of dicts), rewards (B,),
-        terminated (B,) and successes (B,) bool, as ``RigidGymEnv.outcome`` gives them."""
+        """Every copy's step result at once, as ``RigidGymEnv.outcome`` gives each:
+        observations (dict of (B, ...) arrays), rewards (B,), terminated (B,) and successes
+        (B,) bool."""
         first = self.envs[0]
         s = self.world
         held = np.array([env.gripper.held is not None for env in self.envs]) \
             if first.has_grip else None
         vectors, achieved = observe(s.position, s.velocity, s.rotation, s.angular_velocity,
                                     first.gripper.body, first.cubes, held)
-        observations = [env._observation_from(vectors[i], achieved[i])
-                        for i, env in enumerate(self.envs)]
-        achieved32 = np.stack([o["achieved_goal"] for o in observations]).astype(np.float64)
-        desired32 = np.stack([o["desired_goal"] for o in observations]).astype(np.float64)
+        observations = observations_from(self.envs, vectors, achieved, self.goals, s.time)
+        achieved32 = observations["achieved_goal"].astype(np.float64)
+        desired32 = observations["desired_goal"].astype(np.float64)
         successes = np.asarray(first.goal_reached(achieved32, desired32), dtype=bool)
         rewards = np.asarray(first.compute_reward(achieved32, desired32), dtype=np.float64)
         terminated = successes & first.terminate_on_success
@@ -140,10 +153,6 @@ class RigidGymVectorEnv(VectorEnv):
     def close_extras(self, **kwargs):
         for env in self.envs:
             env.close()
-
-    def _stack(self, observations: list[dict]) -> dict:
-        return {key: np.stack([o[key] for o in observations])
-                for key in self.single_observation_space.spaces}
 
 
 def vector_entry_point(env_class: type[RigidGymEnv]):

@@ -62,6 +62,35 @@ def test_each_copy_equals_a_single_env_with_its_seed(env_id):
     assert endings >= num_envs
 
 
+def test_noisy_copies_draw_the_noise_a_single_env_draws():
+    """observation_noise comes from each copy's own np_random, in the order one env alone
+    draws it: copy i's noisy observations equal a single env's reset with seed + i."""
+    kwargs = {"observation_noise": 0.01}
+    envs = gym.make_vec("rigid_gym/Push-v0", num_envs=2, vectorization_mode="vector_entry_point",
+                        **kwargs)
+    singles = [gym.make("rigid_gym/Push-v0", **kwargs) for _ in range(2)]
+    observation, _ = envs.reset(seed=4)
+    expected = [env.reset(seed=4 + i)[0] for i, env in enumerate(singles)]
+    actions = np.random.default_rng(0).uniform(-1, 1, (5, 2, 3))
+    for step in range(6):
+        for i in range(2):
+            np.testing.assert_array_equal(observation["observation"][i],
+                                          expected[i]["observation"])
+        if step < 5:
+            observation = envs.step(actions[step])[0]
+            expected = [env.step(actions[step][i])[0] for i, env in enumerate(singles)]
+    assert not np.array_equal(observation["observation"][0], observation["observation"][1])
+
+
+def test_a_non_finite_copy_is_named():
+    envs = gym.make_vec("rigid_gym/Push-v0", num_envs=3, vectorization_mode="vector_entry_point")
+    envs.reset(seed=0)
+    inner = envs.unwrapped
+    inner.world.state.velocity[1, inner.envs[1].cubes[0], 2] = np.nan
+    with pytest.raises(RuntimeError, match=r"PushEnv \(copy 1\): .*non-finite state"):
+        envs.step(np.zeros((3, 3)))
+
+
 def test_vector_env_refuses_what_it_cannot_do():
     with pytest.raises(ValueError, match="num_envs must be an int >= 1"):
         gym.make_vec("rigid_gym/Push-v0", num_envs=0, vectorization_mode="vector_entry_point")
