@@ -67,16 +67,23 @@ def axis_cosine(ra, rb, k, l):
 
 @kernel
 def turned_boxes_overlap(position, rotation, geo, reach, i, j):
-    """Do bodies i and j's boxes (their own frames' bound boxes, each grown by reach[i] m on
-    every side) overlap? Separating axes: the 3 face normals of each box and the 9 cross
-    products of their edges (Gottschalk, Lin & Manocha 1996; Ericson 4.4.1). position (n, 3),
-    rotation (n, 3, 3): the bodies' poses; reach (n,) m."""
+    """Do bodies i and j's boxes (their own frames' bound boxes, grown by reach[i] and
+    reach[j] m on every side) overlap? Separating axes: the 3 face normals of each box and the
+    9 cross products of their edges (Gottschalk, Lin & Manocha 1996; Ericson 4.4.1).
+    position (n, 3), rotation (n, 3, 3): the bodies' poses; reach (n,) m."""
     ra, rb = rotation[i], rotation[j]
     ci, cj = geo.body_bound_center[i], geo.body_bound_center[j]
     ea = (geo.body_bound_half[i, 0] + reach[i], geo.body_bound_half[i, 1] + reach[i],
           geo.body_bound_half[i, 2] + reach[i])
     eb = (geo.body_bound_half[j, 0] + reach[j], geo.body_bound_half[j, 1] + reach[j],
           geo.body_bound_half[j, 2] + reach[j])
+    # cosines between i's axis k and j's axis l, at [3 k + l]; with the slack where |.| is used
+    c = (axis_cosine(ra, rb, 0, 0), axis_cosine(ra, rb, 0, 1), axis_cosine(ra, rb, 0, 2),
+         axis_cosine(ra, rb, 1, 0), axis_cosine(ra, rb, 1, 1), axis_cosine(ra, rb, 1, 2),
+         axis_cosine(ra, rb, 2, 0), axis_cosine(ra, rb, 2, 1), axis_cosine(ra, rb, 2, 2))
+    a = (abs(c[0]) + BOX_AXIS_SLACK, abs(c[1]) + BOX_AXIS_SLACK, abs(c[2]) + BOX_AXIS_SLACK,
+         abs(c[3]) + BOX_AXIS_SLACK, abs(c[4]) + BOX_AXIS_SLACK, abs(c[5]) + BOX_AXIS_SLACK,
+         abs(c[6]) + BOX_AXIS_SLACK, abs(c[7]) + BOX_AXIS_SLACK, abs(c[8]) + BOX_AXIS_SLACK)
     # centre of j's box minus centre of i's, in i's frame
     t0 = t1 = t2 = 0.0
     for k in range(3):
@@ -89,27 +96,24 @@ def turned_boxes_overlap(position, rotation, geo, reach, i, j):
     for k in range(3):  # i's face normals
         extent = ea[k]
         for l in range(3):
-            extent += eb[l] * (abs(axis_cosine(ra, rb, k, l)) + BOX_AXIS_SLACK)
+            extent += eb[l] * a[3 * k + l]
         if abs(t[k]) > extent:
             return False
     for l in range(3):  # j's face normals
         extent = eb[l]
         along = 0.0
         for k in range(3):
-            cosine = axis_cosine(ra, rb, k, l)
-            extent += ea[k] * (abs(cosine) + BOX_AXIS_SLACK)
-            along += t[k] * cosine
+            extent += ea[k] * a[3 * k + l]
+            along += t[k] * c[3 * k + l]
         if abs(along) > extent:
             return False
     for k in range(3):  # i's edge k crossed with j's edge l
         k1, k2 = (k + 1) % 3, (k + 2) % 3
         for l in range(3):
             l1, l2 = (l + 1) % 3, (l + 2) % 3
-            extent = (ea[k1] * (abs(axis_cosine(ra, rb, k2, l)) + BOX_AXIS_SLACK)
-                      + ea[k2] * (abs(axis_cosine(ra, rb, k1, l)) + BOX_AXIS_SLACK)
-                      + eb[l1] * (abs(axis_cosine(ra, rb, k, l2)) + BOX_AXIS_SLACK)
-                      + eb[l2] * (abs(axis_cosine(ra, rb, k, l1)) + BOX_AXIS_SLACK))
-            along = t[k2] * axis_cosine(ra, rb, k1, l) - t[k1] * axis_cosine(ra, rb, k2, l)
+            extent = (ea[k1] * a[3 * k2 + l] + ea[k2] * a[3 * k1 + l]
+                      + eb[l1] * a[3 * k + l2] + eb[l2] * a[3 * k + l1])
+            along = t[k2] * c[3 * k1 + l] - t[k1] * c[3 * k2 + l]
             if abs(along) > extent:
                 return False
     return True
