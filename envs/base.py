@@ -70,7 +70,7 @@ class RigidGymEnv(gym.Env):
     """Base of every task; see a task's docstring (PushEnv, StackEnv, ThrowEnv) for its tables.
 
     Subclasses set ``num_cubes``, ``has_grip`` and ``goal_size`` and implement
-    ``_place_cubes``, ``_add_fixtures``, ``_sample_goal`` and
+    ``_place_cubes``, ``_place_fixtures``, ``_add_fixtures``, ``_sample_goal`` and
     ``goal_reached``.
     """
 
@@ -122,6 +122,7 @@ class RigidGymEnv(gym.Env):
         })
         self.action_space = spaces.Box(-1.0, 1.0, shape=(3 + int(self.has_grip),),
                                        dtype=np.float32)
+        self.scene: Scene | None = None  # the bodies and shapes; poses are set each reset
         self.world: World | WorldView | None = None
         self.batch: WorldView | None = None  # set by a vector env: this env's world in its batch
         self.gripper: SuctionGripper | None = None
@@ -142,31 +143,51 @@ class RigidGymEnv(gym.Env):
         friction = FRICTION * factor("friction")
         restitution = factors.get("restitution", np.zeros(n + 2))[:n]
 
-        scene = Scene()
-        scene.add_ground(friction=friction[-1], name="table")
         self.cube_half = half
         starts = self._place_cubes(half)
-        cubes = [scene.add_body(Box((h, h, h)), mass=m, position=p, friction=f, restitution=e,
-                                name=f"cube{k}")
-                 for k, (h, m, p, f, e) in enumerate(zip(half, mass, starts, friction,
-                                                         restitution))]
-        gripper = scene.add_body(SuctionGripper.shape, kinematic=True, position=GRIPPER_START,
-                                 friction=friction[-2], name="gripper")
-        self._add_fixtures(scene)
-        self.scene = scene
+        places = self._place_fixtures()
+        if self.scene is None or "size" in self.randomization:
+            self._build_scene(half, starts, places, friction, restitution)
+            self.world = None
         if self.batch is not None:
             self.world = self.batch  # this env's world in a vector env's batch
-        if self.world is None or "size" in self.randomization:
-            self.world = World(scene, dt=STEP_TIME / SOLVER_STEPS)
-        else:  # same shapes as before: new poses and materials (a new World costs ~4 ms)
-            self.world.load(scene)
-        self.cubes = cubes
-        self.gripper = SuctionGripper(self.world, gripper, cubes, [(h, h, h) for h in half],
-                                      STEP_TIME, Workspace())
+        elif self.world is None:  # compiles the scene's geometry: ~4 ms
+            self.world = World(self.scene, dt=STEP_TIME / SOLVER_STEPS)
+        # the episode's state, the same way whether the World is new or not: the scene's
+        # start (the gripper's, nothing moving, nothing held), then the episode's draws
+        self.world.reset()
+        for body, place in zip(self.cubes + self.fixtures, starts + places):
+            self.world.set_pose(body, place)  # a cube's centre of mass is its centre
+        if self.randomization:
+            for cube, m, f, e in zip(self.cubes, mass, friction, restitution):
+                self.world.set_material(cube, mass=m, friction=f, restitution=e)
+            self.world.set_material(self.gripper_body, friction=friction[-2])
+            self.world.set_material(self.table, friction=friction[-1])
+        self.gripper = SuctionGripper(self.world, self.gripper_body, self.cubes,
+                                      [(h, h, h) for h in half], STEP_TIME, Workspace())
         self.goal = self._sample_goal()
         self._renderer = None
         observation = self._observation()
         return observation, {"is_success": self._is_success(observation)}
+
+    def _build_scene(self, half: np.ndarray, starts: list, places: list, friction: np.ndarray,
+                     restitution: np.ndarray) -> None:
+        """The Scene of cubes with half edges ``half`` (k,) m at ``starts`` and fixtures at
+        ``places`` ((3,) m each), and the bodies' indices: built at the first reset, and again
+        only when sizes are randomised. Cubes get the nominal mass (a reset sets each
+        episode's through ``set_material``, so every episode's inertia comes from the same
+        arithmetic); friction (k + 2,) and restitution (k,) are this episode's (restitution
+        > 0 puts the collision phase in the World's config)."""
+        scene = Scene()
+        self.table = scene.add_ground(friction=friction[-1], name="table")
+        self.cubes = [scene.add_body(Box((h, h, h)), mass=CUBE_MASS, position=p, friction=f,
+                                     restitution=e, name=f"cube{k}")
+                      for k, (h, p, f, e) in enumerate(zip(half, starts, friction, restitution))]
+        self.gripper_body = scene.add_body(SuctionGripper.shape, kinematic=True,
+                                           position=GRIPPER_START, friction=friction[-2],
+                                           name="gripper")
+        self.fixtures = self._add_fixtures(scene, places)
+        self.scene = scene
 
     def step(self, action):
         self.act(action)
@@ -256,8 +277,15 @@ class RigidGymEnv(gym.Env):
         """Start positions (3,) m of the cubes with half edges ``half`` (k,), from np_random."""
         raise NotImplementedError
 
-    def _add_fixtures(self, scene: Scene) -> None:
-        """Add static bodies beyond the table (the bin of Throw); none by default."""
+    def _place_fixtures(self) -> list:
+        """Places (3,) m of the static bodies beyond the table (the bin of Throw), drawn from
+        np_random after the cubes' starts; none by default."""
+        return []
+
+    def _add_fixtures(self, scene: Scene, places: list) -> list:
+        """Add the static bodies beyond the table at ``places`` (``_place_fixtures``);
+        returns their body indices."""
+        return []
 
     def _sample_goal(self) -> np.ndarray:
         raise NotImplementedError

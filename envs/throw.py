@@ -101,12 +101,15 @@ class ThrowEnv(RigidGymEnv):
         xy = self.np_random.uniform(-OBJECT_RANGE, OBJECT_RANGE, size=2)
         return [(xy[0], xy[1], half[0])]
 
-    def _add_fixtures(self, scene):
+    def _place_fixtures(self):
         x = self.np_random.uniform(*BIN_X)
         y = self.np_random.uniform(*BIN_Y)
         self.bin_centre = np.array([x, y, 0.0])
-        self.bin = scene.add_body(bin_shape(), static=True, position=self.bin_centre,
-                                  friction=BIN_FRICTION, name="bin")
+        return [self.bin_centre]
+
+    def _add_fixtures(self, scene, places):
+        return [scene.add_body(bin_shape(), static=True, position=places[0],
+                               friction=BIN_FRICTION, name="bin")]
 
     def _sample_goal(self):
         return self.bin_centre + np.array([0.0, 0.0, self.cube_half[0]])

@@ -330,14 +330,47 @@ class World:
             s.velocity[worlds, i] = self._values(velocity, "velocity", "set_velocity", worlds)
         if angular_velocity is None:
             return  # R and omega are unchanged
-        w = self._values(angular_velocity, "angular_velocity", "set_velocity", worlds)
-        s.angular_velocity[worlds, i] = w
-        if self.model.motion[i] == DYNAMIC:
-            r = s.rotation[worlds, i]
-            moments = _safe_inverse(self.model.inverse_moments[worlds, i])
-            body_w = np.einsum("...ji,...j->...i", r, w)
-            s.angular_momentum[worlds, i] = np.einsum("...ij,...j->...i", r, moments * body_w)
-        self._refresh_derived(worlds)
+        self._set_angular_velocity(
+            i, worlds, self._values(angular_velocity, "angular_velocity", "set_velocity", worlds))
+
+    def set_material(self, body: int, *, mass=None, friction=None, restitution=None,
+                     world: int | None = None) -> None:
+        """Change a body's mass (kg > 0, dynamic bodies only), friction (>= 0) and/or
+        restitution (in [0, 1]); what is not given stays. A new mass scales the body's inertia
+        with it (the same shape at another density) and keeps its velocities (L is rescaled).
+        ``world``: which world (None = all; values may then be (B,) for one per world).
+
+        Restitution > 0 is refused where the World derived its config from a scene without
+        restitution (``SolverConfig.for_scene`` left the collision phase out): give the World
+        an explicit config to change that.
+        """
+        i = self._body(body, "set_material")
+        worlds = self._worlds(world, "set_material")
+        m = self.model
+        name = f"body {i} ({self.scene.bodies[i].name!r})"
+        if mass is not None:
+            if m.motion[i] != DYNAMIC:
+                raise ValueError(f"World.set_material: {name} is not dynamic (infinite mass); "
+                                 "only a dynamic body's mass can be set")
+            value = self._scalars(mass, "mass", "set_material", worlds, 0.0, np.inf, "(0, inf)")
+            spec = self.scene.bodies[i]
+            omega = self.state.angular_velocity[worlds, i].copy()
+            m.inverse_mass[worlds, i] = 1.0 / value
+            m.inverse_moments[worlds, i] = spec.inverse_moments * (spec.mass / value)[..., None]
+            self._set_angular_velocity(i, worlds, omega)
+        if friction is not None:
+            m.friction[worlds, i] = self._scalars(friction, "friction", "set_material", worlds,
+                                                  0.0, np.inf, "[0, inf)")
+        if restitution is not None:
+            value = self._scalars(restitution, "restitution", "set_material", worlds, 0.0, 1.0,
+                                  "[0, 1]")
+            if np.any(value > 0.0) and self._config_from_scene \
+                    and self.config.collision_passes == 0:
+                raise ValueError(f"World.set_material: restitution > 0 for {name} needs the "
+                                 "collision phase, which SolverConfig.for_scene left out (every "
+                                 "restitution of the scene is 0); give the World an explicit "
+                                 "config, e.g. SolverConfig(collision_passes=5)")
+            m.restitution[worlds, i] = value
 
     def set_pose(self, body: int, position=None, orientation=None, world: int | None = None) -> None:
         """Set a body's centre-of-mass position (3,) m and/or principal-frame orientation (4,)
@@ -387,6 +420,19 @@ class World:
 
     # -- helpers -----------------------------------------------------------------------------
 
+    def _set_angular_velocity(self, i: int, worlds, w: np.ndarray) -> None:
+        """Body i's angular velocity in ``worlds`` (a slice or one index) to w ((3,) or
+        (B, 3) rad/s); for a dynamic body L = I(t) omega (a component along a degenerate axis
+        is lost)."""
+        s = self.state
+        s.angular_velocity[worlds, i] = w
+        if self.model.motion[i] == DYNAMIC:
+            r = s.rotation[worlds, i]
+            moments = _safe_inverse(self.model.inverse_moments[worlds, i])
+            body_w = np.einsum("...ji,...j->...i", r, w)
+            s.angular_momentum[worlds, i] = np.einsum("...ij,...j->...i", r, moments * body_w)
+        self._refresh_derived(worlds)
+
     def _refresh_derived(self, worlds=slice(None)) -> None:
         """R(q) and omega = I^-1 L of ``worlds`` (a slice, or one world's index)."""
         s, m = self.state, self.model
@@ -425,6 +471,24 @@ class World:
         return arr
 
 
+    def _scalars(self, value, field: str, method: str, worlds, low: float, high: float,
+                 allowed: str) -> np.ndarray:
+        """``value`` as a float64 scalar, or (B,) for every world when ``worlds`` is all of
+        them, checked to lie in [low, high] (``allowed``: the range as the message gives it;
+        an open end excludes its bound)."""
+        arr = np.asarray(value, dtype=np.float64)
+        shapes = [()] + ([(self.num_worlds,)] if worlds == slice(None) else [])
+        if arr.shape not in shapes:
+            raise ValueError(f"World.{method}: {field} must have shape "
+                             f"{' or '.join(map(str, shapes))}, got {arr.shape}")
+        inside = np.isfinite(arr) & (arr <= high)
+        inside &= (arr > low) if allowed.startswith("(") else (arr >= low)
+        if not np.all(inside):
+            raise ValueError(f"World.{method}: {field} must be finite and in {allowed}, "
+                             f"got {arr.tolist()}")
+        return arr
+
+
 class WorldView:
     """World ``index`` of a batched World with the interface of an unbatched one: state
     properties without the world axis, setters, ``contacts``, ``time``. It cannot step (the
@@ -449,6 +513,13 @@ class WorldView:
 
     def contacts(self, margin: float = 0.0) -> Contacts:
         return self.batch.contacts(margin, world=self.index)
+
+    def set_material(self, body, *, mass=None, friction=None, restitution=None) -> None:
+        self.batch.set_material(body, mass=mass, friction=friction, restitution=restitution,
+                                world=self.index)
+
+    def reset(self) -> None:
+        self.batch.reset(world=self.index)
 
     def load(self, scene: Scene) -> None:
         self.batch.load(scene, world=self.index)

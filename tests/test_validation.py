@@ -128,6 +128,28 @@ def test_bad_setter_input_is_rejected():
         world.apply_impulse(0, np.zeros((2, 3)))
 
 
+def test_bad_material_is_rejected_naming_the_range():
+    scene = rg.Scene()
+    ground = scene.add_ground()
+    cube = scene.add_body(rg.Box((0.05,) * 3), mass=1.0, position=(0, 0, 0.05))
+    world = rg.World(scene)
+    for kwargs, message in (({"mass": 0.0}, r"mass must be finite and in \(0, inf\)"),
+                            ({"mass": np.nan}, "mass must be finite"),
+                            ({"friction": -0.1}, r"friction must be finite and in \[0, inf\)"),
+                            ({"restitution": 1.5}, r"restitution must be finite and in \[0, 1\]"),
+                            ({"mass": [1.0, 2.0]}, r"mass must have shape \(\)")):
+        with pytest.raises(ValueError, match=message):
+            world.set_material(cube, **kwargs)
+    with pytest.raises(ValueError, match="not dynamic"):
+        world.set_material(ground, mass=1.0)
+    # the derived config has no collision phase for this scene: a bounce would be lost
+    with pytest.raises(ValueError, match="needs the collision phase"):
+        world.set_material(cube, restitution=0.5)
+    explicit = rg.World(scene, config=rg.SolverConfig())
+    explicit.set_material(cube, restitution=0.5)
+    assert explicit.model.restitution[0, cube] == 0.5
+
+
 def test_bad_solver_config_is_rejected():
     with pytest.raises(ValueError, match="rotation_order must be one of"):
         rg.SolverConfig(rotation_order=4)

@@ -219,3 +219,23 @@ def test_a_reloaded_world_steps_exactly_as_a_new_one():
         bouncy.add_body(rg.Box((0.05,) * 3), mass=1.0, position=(0, 0, 0.05 + 0.1 * k))
     with pytest.raises(ValueError, match="another SolverConfig"):
         reloaded.load(bouncy, 0)
+
+
+def test_set_material_changes_mass_inertia_friction_and_restitution():
+    """A new mass: an impulse j then gives V = j / m and the inertia scales with the mass,
+    so a spinning box keeps omega and its L scales (closed forms for a box of half
+    extents a, b, c: I_x = m (b^2 + c^2) / 3). Per-world values go to their worlds only."""
+    scene = rg.Scene(gravity=(0.0, 0.0, 0.0))
+    box = scene.add_body(rg.Box((0.1, 0.2, 0.3)), mass=2.0, angular_velocity=(0.0, 0.0, 3.0))
+    world = rg.World(scene, num_worlds=2)
+    world.set_material(box, mass=np.array([4.0, 0.5]), friction=0.8)
+    world.set_material(box, restitution=0.0, world=1)
+    np.testing.assert_allclose(world.angular_velocity[:, box], [[0, 0, 3.0]] * 2, rtol=1e-15)
+    for w, m in enumerate((4.0, 0.5)):
+        inertia_z = m * (0.1**2 + 0.2**2) / 3.0
+        np.testing.assert_allclose(world.body_angular_momentum[w, box, 2], 3.0 * inertia_z,
+                                   rtol=1e-14)
+    world.apply_impulse(box, (1.0, 0.0, 0.0))
+    np.testing.assert_allclose(world.velocity[:, box, 0], [1.0 / 4.0, 1.0 / 0.5], rtol=1e-15)
+    np.testing.assert_array_equal(world.model.friction[:, box], [0.8, 0.8])
+
