@@ -36,6 +36,8 @@ class SolverConfig:
         than about edge length / (2 box_edge_segments) (benchmarks/box_edge_samples.py).
     sweep: broad phase by sort-and-sweep (True) or brute force (False); None chooses
         sort-and-sweep from ``collision.SWEEP_MIN_BODIES`` bounded bodies.
+    sleep: skip a body resting alone on a static or kinematic one while its step is a fixed
+        point (``kernels/rest.py``); exact, so off only to measure what it saves.
     """
 
     collision_passes: int = 5
@@ -44,6 +46,7 @@ class SolverConfig:
     rotation_order: int = 2
     box_edge_segments: int = 4
     sweep: bool | None = None
+    sleep: bool = True
 
     def __post_init__(self):
         for name, low, high in (("collision_passes", 0, 1000), ("contact_passes", 0, 1000),
@@ -58,6 +61,8 @@ class SolverConfig:
                              f"got {self.rotation_order!r}")
         if self.sweep not in (None, True, False):
             raise ValueError(f"SolverConfig.sweep must be None, True or False, got {self.sweep!r}")
+        if not isinstance(self.sleep, bool):
+            raise ValueError(f"SolverConfig.sleep must be True or False, got {self.sleep!r}")
 
     @classmethod
     def for_scene(cls, scene: Scene, **overrides) -> SolverConfig:

@@ -20,7 +20,7 @@ import numba
 import numpy as np
 
 from rigid_gym.config import SolverConfig
-from rigid_gym.kernels import integrate, solver
+from rigid_gym.kernels import integrate, rest, solver
 from rigid_gym.kernels.jit import compiled_entry
 from rigid_gym.kernels.step import (
     BROAD_PHASE,
@@ -58,7 +58,8 @@ class Workspace:
     """The impulse phases' work arrays for B worlds of n bodies (``solver.Scratch`` for one
     pair's contacts and for one body's contacts with all its supports, ``solver.Graph`` for
     shock propagation), allocated once and reused by every step; the graph grows with the
-    pair capacity. ``step_call``: ``step_worlds``' compiled entry for this world's argument
+    pair capacity. ``rest``: sleeping's bookkeeping (``kernels/rest.Rest``), kept from step
+    to step. ``step_call``: ``step_worlds``' compiled entry for this world's argument
     types (``jit.compiled_entry``), bound at the first step."""
 
     def __init__(self, num_worlds: int, num_bodies: int, pair_contacts: int):
@@ -70,6 +71,13 @@ class Workspace:
                               c=SUPPORT_CONTACTS * pair_contacts)
         self.graph = None
         self.pair_capacity = -1
+        self.rest = _allocate(rest.Rest, rest.REST_SHAPES, num_worlds, n=num_bodies)
+        self.forget(slice(None))
+
+    def forget(self, worlds) -> None:
+        """No body of ``worlds`` (an index or a slice) sleeps in their next step: what
+        changed cannot be seen in their state (masses, materials, attachments)."""
+        self.rest.previous_partner[worlds] = rest.SEVERAL
 
     def fit_pairs(self, pair_capacity: int) -> None:
         """Size the graph for ``pair_capacity`` pairs per world."""
@@ -103,7 +111,7 @@ def settings(config: SolverConfig, gravity: np.ndarray, sweep: bool) -> Settings
     up = -gravity / magnitude if magnitude > 0.0 else np.array([0.0, 0.0, 1.0])
     return Settings(config.collision_passes, config.contact_passes, config.shock_sweeps,
                     config.rotation_order, bool(sweep), config.phases()["broad_phase"],
-                    magnitude, up)
+                    config.sleep, magnitude, up)
 
 
 THREADS = min(numba.config.NUMBA_NUM_THREADS,
@@ -123,7 +131,7 @@ def advance(world, steps: int, phases: int = EVERY_PHASE) -> None:
     while True:
         work.fit_pairs(pairs.pair_a.shape[1])
         args = (steps, phases, done, world.dt, s, m, geo, pairs.pairs, work.scratch, work.wide,
-                work.graph, world.settings, world.attached)
+                work.graph, world.settings, world.attached, work.rest)
         *others, mine = _world_ranges(world.num_worlds)
         if work.step_call is None:  # the buffers grow with the same types: bound once
             work.step_call = compiled_entry(step_worlds, *mine, *args)

@@ -143,6 +143,7 @@ class World:
         for current, initial in zip(self.state, self._initial_state):
             current[worlds] = initial[worlds]
         self.attached.parent[worlds] = -1
+        self.workspace.forget(worlds)
         if world is None:
             self.steps = 0
 
@@ -169,6 +170,7 @@ class World:
         for current, new in zip(self.state, _build_state(scene, 1)):
             current[w] = new[0]
         self.attached.parent[w] = -1
+        self.workspace.forget(w)
         if world is None or self.num_worlds == 1:
             self.steps = 0  # every world starts over
 
@@ -187,6 +189,7 @@ class World:
             "...ji,...j->...i", s.rotation[worlds, p], s.position[worlds, i] - s.position[worlds, p])
         self.attached.offset_orientation[worlds, i] = quat.multiply(inverse, s.orientation[worlds, i])
         self.attached.parent[worlds, i] = p
+        self.workspace.forget(worlds)
         self._place_attached(worlds)
 
     def detach(self, body: int, world: int | None = None) -> None:
@@ -196,6 +199,7 @@ class World:
         worlds = self._worlds(world, "detach")
         self._place_attached(worlds)
         self.attached.parent[worlds, i] = -1
+        self.workspace.forget(worlds)
 
     def _place_attached(self, worlds) -> None:
         for index in range(self.num_worlds)[worlds] if isinstance(worlds, slice) else [worlds]:
@@ -346,6 +350,7 @@ class World:
         """
         i = self._body(body, "set_material")
         worlds = self._worlds(world, "set_material")
+        self.workspace.forget(worlds)
         m = self.model
         name = f"body {i} ({self.scene.bodies[i].name!r})"
         if mass is not None:

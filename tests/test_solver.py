@@ -1,6 +1,8 @@
 """The impulse solver against exact answers (issue bar: bounce, slide, incline, rolling, head-on,
 stacks, heavy-on-light, piles). Tolerances are stated where they are used."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -344,3 +346,76 @@ def test_a_struck_box_meets_its_resting_neighbour_in_the_same_step():
     # one inelastic train, to within 10 x REST_SPEED (slower approaches count as at rest)
     np.testing.assert_allclose(world.velocity[:, 0], 5.0 / 3.0, rtol=0, atol=1e-8)
     assert deepest < 5e-4
+
+
+def sleeping_scene():
+    """Cubes resting apart on the ground (one bouncy), a sphere thrown at one of them, and a
+    kinematic pad that comes down onto another and pushes it."""
+    scene = rg.Scene()
+    scene.add_ground(friction=0.6)
+    for k, x in enumerate((0.0, 0.5, 1.0)):
+        scene.add_body(rg.Box((0.05,) * 3), mass=1.0, position=(x, 0.0, 0.05),
+                       restitution=0.3 if k == 2 else 0.0, name=f"cube{k}")
+    scene.add_body(rg.Sphere(0.04), mass=0.5, position=(-0.6, 0.0, 0.3), velocity=(2.5, 0, 0.5),
+                   name="ball")
+    scene.add_body(rg.Box((0.06, 0.06, 0.02)), kinematic=True, position=(0.5, 0.0, 0.3),
+                   name="pad")
+    return scene
+
+
+
+def step_with_interventions(world, steps):
+    """Step one at a time: the pad comes down at step 120 and pushes sideways from 180;
+    at 250 cube 2 gets a new mass and at 300 a push. Returns every step's state and pair
+    impulses, and how many bodies slept in each step."""
+    pad, cube2 = world.body_index("pad"), world.body_index("cube2")
+    states, sleeping = [], []
+    for t in range(steps):
+        if t == 120:
+            world.set_velocity(pad, (0.0, 0.0, -0.5))
+        if t == 180:
+            world.set_velocity(pad, (0.3, 0.0, 0.0))
+        if t == 250:
+            world.set_material(cube2, mass=3.0)
+        if t == 300:
+            world.apply_force(cube2, (400.0, 0.0, 0.0))
+        world.step(1)
+        count = world.collider.pair_count[0]
+        states.append([a.copy() for a in world.state]
+                      + [world.collider.pair_impulse[:, :count].copy()])
+        sleeping.append(int(world.workspace.rest.asleep.sum()))
+    return states, sleeping
+
+
+def test_sleeping_is_exact():
+    """A body resting alone on a static or kinematic one, whose last step changed nothing,
+    is skipped (kernels/rest.py): states and pair impulses are bit-identical to stepping
+    everything, through a ball striking a resting cube, a pad landing on one and pushing it,
+    a new mass and a force; and bodies did sleep (else the test would pass vacuously)."""
+    scene = sleeping_scene()
+    config = rg.SolverConfig.for_scene(scene)
+    states, sleeping = step_with_interventions(rg.World(scene, config=config), 400)
+    awake_config = dataclasses.replace(config, sleep=False)
+    states_awake, sleeping_awake = step_with_interventions(rg.World(scene, config=awake_config),
+                                                           400)
+    for t, (one, other) in enumerate(zip(states, states_awake)):
+        for a, b in zip(one, other):
+            assert a.tobytes() == b.tobytes(), f"step {t}"
+    assert max(sleeping_awake) == 0
+    assert max(sleeping[:60]) == 3  # the three cubes, before the ball arrives
+    assert min(sleeping[300:340]) == 0  # pushed or struck, every cube is awake
+    assert sleeping[-1] >= 1  # and one has come to rest again
+
+
+def test_a_sleeping_cube_reports_its_weight_as_the_support_impulse():
+    """While asleep, the cube's pair with the ground still transmits m g dt per step (what
+    stepping it gives: the test above), exactly as the first steps at rest did."""
+    scene = rg.Scene()
+    scene.add_ground()
+    scene.add_body(rg.Box((0.05,) * 3), mass=2.0, position=(0.0, 0.0, 0.05))
+    world = rg.World(scene, dt=1 / 240)
+    world.step(50)
+    assert world.workspace.rest.asleep[0, 1]
+    np.testing.assert_allclose(world.collider.pair_impulse[0, 0], [0, 0, -2.0 * 9.81 / 240]
+                               if world.collider.pair_a[0, 0] == 0 else
+                               [0, 0, 2.0 * 9.81 / 240], rtol=1e-12, atol=1e-15)

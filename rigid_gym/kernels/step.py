@@ -20,6 +20,13 @@ from rigid_gym.kernels.integrate import (
     update_world_velocities,
 )
 from rigid_gym.kernels.jit import kernel
+from rigid_gym.kernels.rest import (
+    any_awake_pair,
+    keep_rest_impulses,
+    mark_asleep,
+    restore_asleep,
+    wake_world,
+)
 from rigid_gym.kernels.solver import (
     COLLISION,
     CONTACT,
@@ -43,10 +50,10 @@ int32 (-1: free), offset_position (B, n, 3) m in the parent's frame, offset_orie
 (B, n, 4) relative to the parent's."""
 
 Settings = namedtuple("Settings", "collision_passes contact_passes shock_sweeps rotation_order "
-                                  "sweep broad_phase gravity up")
+                                  "sweep broad_phase sleep gravity up")
 """What ``SolverConfig`` decides, as the kernels take it: pass and sweep counts (0 = phase
-off), the rotation order, sort and sweep on or off, whether the broad phase runs, |g| (m/s^2)
-and the unit vector against gravity (3,)."""
+off), the rotation order, sort and sweep on or off, whether the broad phase runs, sleeping
+on or off (``kernels/rest.py``), |g| (m/s^2) and the unit vector against gravity (3,)."""
 
 
 BROAD_PHASE, COLLISION_PHASE, VELOCITY_PHASE, CONTACT_PHASE, SHOCK_PHASE, POSITION_PHASE = (
@@ -61,7 +68,7 @@ MAX_RELISTS = 4
 
 @kernel(inline=True)
 def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, graph, settings,
-               attached):
+               attached, rest):
     """Advance world w by up to ``steps`` steps of dt (s), running the phases whose bits are
     set in ``phases`` (EVERY_PHASE: whole steps); returns how many were done. Fewer than
     ``steps`` means the pair buffers were too small for the next step (nothing of that step
@@ -71,15 +78,17 @@ def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, gr
     scratch, wide: batched ``solver.Scratch`` (one pair's contacts; one body's contacts with
     all its supports); graph: batched ``solver.Graph``; settings: Settings; attached:
     Attachments, whose bodies are put at their place before every step (with the broad phase)
-    and after the last (with the position update). Forces and torques act during the first
-    step and are cleared by its position update.
+    and after the last (with the position update); rest: ``rest.Rest``, which bodies sleep
+    through the step (with ``settings.sleep``). Forces and torques act during the first step
+    and are cleared by its position update.
 
     The broad phase lists the pairs that can touch if every body keeps its speed through the
     step (``swept_margin``), but the impulse phases may speed a body up: a resting box struck
     by another. Before the position update, a body whose new velocity reaches past its box
     grows its box; if that lists more pairs, the velocities are put back as they were when
     the impulse phases began and the phases run again with every pair (up to MAX_RELISTS
-    times), so a body is not moved into a neighbour whose pair was never listed.
+    times), so a body is not moved into a neighbour whose pair was never listed. Nothing
+    sleeps then.
     """
     s, m, c, a = state, model, settings, attached
     capacity = pairs.pair_a.shape[1]
@@ -98,8 +107,14 @@ def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, gr
             pairs.pair_impulse[w, :count] = 0.0  # Coulomb's limit applies to the step's total
             keep_velocities(s.velocity[w], s.angular_momentum[w], s.angular_velocity[w],
                             pairs.start[w], True)
-        impulse_phases(w, phases, dt, s, m, geo, pairs, scratch, wide, graph, c)
+            if c.sleep:
+                mark_asleep(w, s, m.motion, pairs.pair_a[w], pairs.pair_b[w], count,
+                            pairs.pair_impulse[w], a.parent[w], rest)
+        impulse_phases(w, phases, dt, s, m, geo, pairs, scratch, wide, graph, c, rest.asleep[w])
         if phases & POSITION_PHASE:
+            if c.sleep:
+                restore_asleep(w, s.velocity, s.angular_momentum, s.angular_velocity,
+                               pairs.start[w], rest.asleep[w])
             if c.broad_phase:
                 for _ in range(MAX_RELISTS):
                     if not outgrown(w, dt, s, geo, pairs.reach[w]):
@@ -111,11 +126,15 @@ def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, gr
                     pairs.pair_count[w] = more
                     keep_velocities(s.velocity[w], s.angular_momentum[w],
                                     s.angular_velocity[w], pairs.start[w], False)
+                    wake_world(w, rest)
                     if more > capacity:
                         return done
                     pairs.pair_impulse[w, :more] = 0.0
                     impulse_phases(w, IMPULSE_PHASES, dt, s, m, geo, pairs, scratch, wide,
-                                   graph, c)
+                                   graph, c, rest.asleep[w])
+            if c.sleep:
+                keep_rest_impulses(w, pairs.pair_a[w], pairs.pair_b[w], pairs.pair_count[w],
+                                   pairs.pair_impulse[w], rest)
             update_world_positions(w, s.position, s.orientation, s.velocity, s.angular_momentum,
                                    s.angular_velocity, s.rotation, s.torque, m.inverse_moments,
                                    m.motion, dt, c.rotation_order)
@@ -139,24 +158,27 @@ def list_pairs(w, dt, acceleration, s, m, geo, pairs, c):
 
 
 @kernel(inline=True)
-def impulse_phases(w, phases, dt, s, m, geo, pairs, scratch, wide, graph, c):
+def impulse_phases(w, phases, dt, s, m, geo, pairs, scratch, wide, graph, c, asleep):
     """World w's collision, velocity update, contact and shock phases (those whose bits are
-    set in ``phases``) over its listed pairs; arguments as ``step_world``'s."""
+    set in ``phases``) over its listed pairs but those of asleep ((n,) bool) bodies;
+    arguments as ``step_world``'s."""
     count = pairs.pair_count[w]
     pair_a, pair_b, impulse = pairs.pair_a[w], pairs.pair_b[w], pairs.pair_impulse[w]
+    if c.sleep and not any_awake_pair(pair_a, pair_b, count, asleep):
+        count = 0  # every pair's body sleeps: the pair phases have nothing to do
     if phases & COLLISION_PHASE and c.collision_passes > 0 and count > 0:
         resolve_world_contacts(s, m, geo, w, pair_a, pair_b, count, impulse, dt, COLLISION,
-                               c.collision_passes, scratch)
+                               c.collision_passes, scratch, asleep)
     if phases & VELOCITY_PHASE:
         update_world_velocities(w, s.velocity, s.angular_momentum, s.angular_velocity,
                                 s.rotation, s.force, s.torque, m.inverse_mass,
                                 m.inverse_moments, m.motion, m.gravity, dt)
     if phases & CONTACT_PHASE and c.contact_passes > 0 and count > 0:
         resolve_world_contacts(s, m, geo, w, pair_a, pair_b, count, impulse, dt, CONTACT,
-                               c.contact_passes, scratch)
+                               c.contact_passes, scratch, asleep)
     if phases & SHOCK_PHASE and c.shock_sweeps > 0 and c.gravity > 0.0 and count > 0:
         propagate_world_shock(s, m, geo, w, pair_a, pair_b, count, impulse, dt, c.up,
-                              c.shock_sweeps, scratch, wide, graph)
+                              c.shock_sweeps, scratch, wide, graph, asleep)
 
 
 @kernel
@@ -190,7 +212,7 @@ def outgrown(w, dt, s, geo, reach):
 
 @kernel
 def step_worlds(first, last, steps, phases, done, dt, state, model, geo, pairs, scratch, wide,
-                graph, settings, attached):
+                graph, settings, attached, rest):
     """``step_world`` for worlds first, ..., last - 1, one after the other: each world w
     advances from done[w] ((B,) int64) steps to ``steps``, and done[w] is updated (short of
     ``steps`` when its pair buffers were too small). The one compiled entry to the step:
@@ -200,4 +222,4 @@ def step_worlds(first, last, steps, phases, done, dt, state, model, geo, pairs, 
     for w in range(first, last):
         if done[w] < steps:
             done[w] += step_world(w, steps - done[w], phases, dt, state, model, geo, pairs,
-                                  scratch, wide, graph, settings, attached)
+                                  scratch, wide, graph, settings, attached, rest)
