@@ -8,15 +8,18 @@ level 1 against its one frozen support; extra passes or sweeps that other bodies
 the same state again and apply nothing. So if, at the start of a step, such a body, its
 partner and its pair are exactly (bit for bit) as they were at the start of the last step,
 and no force, torque or attachment acts on it, this step would leave it exactly where the
-last one did: where it is. The body is then ``asleep`` for the step: its pair is skipped by
-every phase, its velocities are put back before the position update (which then moves it by
-the same velocity as the last step's, i.e. nowhere: it is a fixed point), and its pair reports
-the impulse it transmitted in the last step, as stepping it would.
+last one did: where it is. The body is then ``asleep`` for the step: its pair is moved behind
+the awake pairs, which are all the impulse phases see (their order kept, and what the
+phases do with a pair depends only on the pairs sharing a movable body with it); its
+velocities are put back before the position update (which then moves it by the same
+velocity as the last step's, i.e. nowhere: it is a fixed point); and its pair reports the
+impulse it transmitted in the last step, as stepping it would.
 
-What the comparison cannot see wakes a world from Python (``World`` calls ``forget``):
-new masses, friction or restitution, a reset or load, attaching and detaching. A relist in
-a step (``kernels/step.py``) wakes its world too. The test of exactness is that stepping
-with sleeping on and off gives identical bits (tests/test_solver.py, tests/test_vector.py).
+What the comparison cannot see wakes a world from Python (``World`` calls
+``Workspace.forget``): new masses, friction or restitution, a reset or load, attaching and
+detaching. A relist in a step (``kernels/step.py``) wakes its world too. The test of
+exactness is stepping with sleeping on and off and comparing every state and impulse bit
+for bit (tests/test_solver.py).
 """
 
 import math
@@ -27,9 +30,10 @@ import numpy as np
 from rigid_gym.kernels.integrate import DYNAMIC
 from rigid_gym.kernels.jit import kernel
 
-Rest = namedtuple("Rest", "asleep partner previous_partner snapshot impulse")
+Rest = namedtuple("Rest", "asleep awake_pairs partner previous_partner snapshot impulse")
 """Sleeping's bookkeeping, leading world axis B (n bodies): asleep (B, n) bool, skipped by
-the current step; partner (B, n) int64, for a dynamic body whose one listed pair is with a
+the current step; awake_pairs (B,) int64, how many of the step's listed pairs (the first
+ones) are awake; partner (B, n) int64, for a dynamic body whose one listed pair is with a
 static or kinematic body, that body (else SEVERAL, or NONE without pairs), in the current
 step and (previous_partner) the last; snapshot (B, n, SNAPSHOT) float64, every body's
 state at the start of the last step; impulse (B, n, 3) N s, the impulse on each such body
@@ -42,7 +46,8 @@ NONE = -2
 SEVERAL = -1
 """``partner`` values: no pair; more than one, or one with a dynamic body (also: forgotten)."""
 
-REST_SHAPES = (("asleep", ("n",), np.bool_), ("partner", ("n",), np.int64),
+REST_SHAPES = (("asleep", ("n",), np.bool_), ("awake_pairs", (), np.int64),
+               ("partner", ("n",), np.int64),
                ("previous_partner", ("n",), np.int64), ("snapshot", ("n", SNAPSHOT), np.float64),
                ("impulse", ("n", 3), np.float64))
 """Per-world shape of each Rest field ("n": bodies) and dtype."""
@@ -85,11 +90,13 @@ def note_partner(partner, motion, i, j):
 
 
 @kernel(inline=True)
-def mark_asleep(w, state, motion, pair_a, pair_b, count, pair_impulse, parent, rest):
+def mark_asleep(w, state, motion, pair_a, pair_b, count, pair_impulse, parent, rest, spare):
     """At the start of world w's step, after the broad phase (its ``count`` pairs pair_a,
     pair_b (P,) int32; pair_impulse (P, 3) zeroed): decide which bodies are asleep (module
-    docstring), give their pairs the last step's impulses, and keep this step's partners and
-    states for the next. parent (n,) int32: attachments (-1: free); rest: ``Rest``."""
+    docstring), move their pairs behind the awake ones (rest.awake_pairs says how many
+    those are) with the last step's impulses, and keep this step's partners and states for
+    the next. parent (n,) int32: attachments (-1: free); rest: ``Rest``; spare (P,) int64:
+    scratch."""
     n = state.position.shape[1]
     partner, asleep = rest.partner[w], rest.asleep[w]
     for i in range(n):
@@ -111,23 +118,32 @@ def mark_asleep(w, state, motion, pair_a, pair_b, count, pair_impulse, parent, r
         for k in range(SNAPSHOT):
             rest.snapshot[w, i, k] = body_state(state, w, i, k)
         rest.previous_partner[w, i] = partner[i]
-    for k in range(count):
+    awake = move_asleep_last(pair_a, pair_b, count, asleep, spare)
+    for k in range(awake, count):
         a, b = pair_a[k], pair_b[k]
         for c in range(3):
-            if asleep[a]:
-                pair_impulse[k, c] = rest.impulse[w, a, c]
-            elif asleep[b]:
-                pair_impulse[k, c] = -rest.impulse[w, b, c]
+            pair_impulse[k, c] = rest.impulse[w, a, c] if asleep[a] else -rest.impulse[w, b, c]
+    rest.awake_pairs[w] = awake
 
 
 @kernel(inline=True)
-def any_awake_pair(pair_a, pair_b, count, asleep):
-    """Is some one of the ``count`` pairs (pair_a, pair_b (P,) int32) free of asleep ((n,)
-    bool) bodies?"""
+def move_asleep_last(pair_a, pair_b, count, asleep, spare):
+    """Reorder the ``count`` pairs (pair_a, pair_b (P,) int32): those without an asleep ((n,)
+    bool) body first, then those with one, each in their order; returns how many are awake.
+    spare (P,) int64: scratch."""
+    n = asleep.shape[0]
+    awake = sleeping = 0
     for k in range(count):
-        if not asleep[pair_a[k]] and not asleep[pair_b[k]]:
-            return True
-    return False
+        a, b = pair_a[k], pair_b[k]
+        if asleep[a] or asleep[b]:
+            spare[sleeping] = a * n + b
+            sleeping += 1
+        else:
+            pair_a[awake], pair_b[awake] = a, b
+            awake += 1
+    for k in range(sleeping):
+        pair_a[awake + k], pair_b[awake + k] = spare[k] // n, spare[k] % n
+    return awake
 
 
 @kernel(inline=True)
@@ -157,8 +173,10 @@ def restore_asleep(w, velocity, angular_momentum, angular_velocity, kept, asleep
 
 
 @kernel(inline=True)
-def wake_world(w, rest):
-    """No body of world w sleeps in the rest of this step or in the next."""
+def wake_world(w, rest, count):
+    """No body of world w sleeps in the rest of this step (all its ``count`` pairs are awake)
+    or in the next."""
     for i in range(rest.asleep.shape[1]):
         rest.asleep[w, i] = False
         rest.previous_partner[w, i] = SEVERAL
+    rest.awake_pairs[w] = count

@@ -380,12 +380,11 @@ def resolve_supported_body(state, model, geo, w, body, current, pair_a, pair_b, 
 
 @kernel
 def resolve_world_contacts(state, model, geo, w, pair_a, pair_b, pairs, accumulated, dt, mode,
-                           passes, scratch, asleep):
+                           passes, scratch):
     """The collision (mode COLLISION) or contact (mode CONTACT) phase for world w: up to
     ``passes`` sweeps over its ``pairs`` candidate pairs (pair_a, pair_b (P,) int32), stopping
     early when a sweep applies no impulse. accumulated (P, 3): each pair's impulse on its body
-    a in this step, N s (added to here); scratch: the batched Scratch; asleep (n,) bool: the
-    pairs of these bodies are skipped (``kernels/rest.py``).
+    a in this step, N s (added to here); scratch: the batched Scratch.
 
     In the contact phase, a pair whose movable bodies are in no other pair (``alone``: a cube
     on the table, two boxes meeting in the air) skips the restitution ramp: the ramp shares
@@ -406,8 +405,6 @@ def resolve_world_contacts(state, model, geo, w, pair_a, pair_b, pairs, accumula
             applied = 0
             for k in range(pairs):
                 a, b = pair_a[k], pair_b[k]
-                if asleep[a] or asleep[b]:
-                    continue
                 if ramp and alone(model, a, b, scratch.pairs_of) != (group == 1):
                     continue
                 applied += resolve_pair(state, model, geo, w, k, a, b, dt, scratch.lookahead,
@@ -604,17 +601,13 @@ def pairs_by_body(n, pair_a, pair_b, pairs, graph):
 
 
 @kernel
-def build_contact_graph(state, model, geo, w, pair_a, pair_b, pairs, dt, up, scratch, graph,
-                        asleep):
+def build_contact_graph(state, model, geo, w, pair_a, pair_b, pairs, dt, up, scratch, graph):
     """Which pairs touch at the predicted poses (graph.touching) and the support edges between
     their bodies (graph.edge_from -> edge_to, lower to upper, both ways for side contacts);
-    returns the number of edges. The pairs of asleep ((n,) bool) bodies are left out."""
+    returns the number of edges."""
     edges = 0
     for k in range(pairs):
         a, b = pair_a[k], pair_b[k]
-        if asleep[a] or asleep[b]:
-            graph.touching[k] = False
-            continue
         graph.touching[k] = find_pair_contacts(state, model, geo, w, a, b, dt, scratch.lookahead,
                                                GRAPH_MARGIN, scratch) > 0
         if not graph.touching[k] or model.motion[b] != DYNAMIC:
@@ -632,18 +625,18 @@ def build_contact_graph(state, model, geo, w, pair_a, pair_b, pairs, dt, up, scr
 
 @kernel
 def propagate_world_shock(state, model, geo, w, pair_a, pair_b, pairs, accumulated, dt, up,
-                          sweeps, scratch, wide, graph, asleep):
+                          sweeps, scratch, wide, graph):
     """The shock-propagation phase for world w (see the module docstring).
 
     up: (3,) unit vector against gravity; sweeps: passes over each level; batched work arrays:
     scratch, a Scratch for one pair's contacts, wide, one with room for a body's contacts with
-    all its supports, and graph, a Graph; asleep (n,) bool: bodies left out."""
+    all its supports, and graph, a Graph."""
     n = state.position.shape[1]
     scratch, wide, graph = world_scratch(scratch, w), world_scratch(wide, w), world_graph(graph, w)
     for c in range(3):
         scratch.lookahead[c] = 0.0
     edges = build_contact_graph(state, model, geo, w, pair_a, pair_b, pairs, dt, up, scratch,
-                                graph, asleep)
+                                graph)
     contact_levels(n, model.motion, edges, graph)
     pairs_by_body(n, pair_a, pair_b, pairs, graph)
     level, by_level = graph.level, graph.by_level

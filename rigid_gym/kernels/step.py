@@ -21,9 +21,9 @@ from rigid_gym.kernels.integrate import (
 )
 from rigid_gym.kernels.jit import kernel
 from rigid_gym.kernels.rest import (
-    any_awake_pair,
     keep_rest_impulses,
     mark_asleep,
+    move_asleep_last,
     restore_asleep,
     wake_world,
 )
@@ -38,7 +38,8 @@ Pairs = namedtuple("Pairs", "bounds order pair_a pair_b pair_count pair_impulse 
                              "reach start")
 """The broad phase's buffers, leading world axis B (n bodies, P pair capacity): bounds
 (B, n, 6) m; order (B, n) int64, sort-and-sweep's body order kept from step to step;
-pair_a, pair_b (B, P) int32; pair_count (B,) int32 (may exceed P: buffers too small);
+pair_a, pair_b (B, P) int32, sorted by (a, b) but, with sleeping, the pairs of asleep bodies
+moved last (``rest.move_asleep_last``); pair_count (B,) int32 (may exceed P: buffers too small);
 pair_impulse (B, P, 3) N s, each pair's impulse on its body a in the current step;
 keys, tmp (B, P) int64 sorting scratch; reach (B, n) m, how far each body's box was grown
 in the current step; start (B, 3, n, 3): velocity, angular momentum and angular velocity
@@ -107,10 +108,12 @@ def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, gr
             pairs.pair_impulse[w, :count] = 0.0  # Coulomb's limit applies to the step's total
             keep_velocities(s.velocity[w], s.angular_momentum[w], s.angular_velocity[w],
                             pairs.start[w], True)
+            rest.awake_pairs[w] = count
             if c.sleep:
                 mark_asleep(w, s, m.motion, pairs.pair_a[w], pairs.pair_b[w], count,
-                            pairs.pair_impulse[w], a.parent[w], rest)
-        impulse_phases(w, phases, dt, s, m, geo, pairs, scratch, wide, graph, c, rest.asleep[w])
+                            pairs.pair_impulse[w], a.parent[w], rest, pairs.keys[w])
+        impulse_phases(w, phases, dt, s, m, geo, pairs, scratch, wide, graph, c,
+                       rest.awake_pairs[w])
         if phases & POSITION_PHASE:
             if c.sleep:
                 restore_asleep(w, s.velocity, s.angular_momentum, s.angular_velocity,
@@ -122,16 +125,19 @@ def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, gr
                     count = pairs.pair_count[w]
                     more = list_pairs(w, dt, 0.0, s, m, geo, pairs, c)  # the final velocities
                     if more == count:  # boxes only grow: the same count is the same pairs
+                        if c.sleep:  # in the order the impulses were recorded in
+                            move_asleep_last(pairs.pair_a[w], pairs.pair_b[w], count,
+                                             rest.asleep[w], pairs.keys[w])
                         break
                     pairs.pair_count[w] = more
                     keep_velocities(s.velocity[w], s.angular_momentum[w],
                                     s.angular_velocity[w], pairs.start[w], False)
-                    wake_world(w, rest)
+                    wake_world(w, rest, more)
                     if more > capacity:
                         return done
                     pairs.pair_impulse[w, :more] = 0.0
                     impulse_phases(w, IMPULSE_PHASES, dt, s, m, geo, pairs, scratch, wide,
-                                   graph, c, rest.asleep[w])
+                                   graph, c, more)
             if c.sleep:
                 keep_rest_impulses(w, pairs.pair_a[w], pairs.pair_b[w], pairs.pair_count[w],
                                    pairs.pair_impulse[w], rest)
@@ -158,27 +164,24 @@ def list_pairs(w, dt, acceleration, s, m, geo, pairs, c):
 
 
 @kernel(inline=True)
-def impulse_phases(w, phases, dt, s, m, geo, pairs, scratch, wide, graph, c, asleep):
+def impulse_phases(w, phases, dt, s, m, geo, pairs, scratch, wide, graph, c, count):
     """World w's collision, velocity update, contact and shock phases (those whose bits are
-    set in ``phases``) over its listed pairs but those of asleep ((n,) bool) bodies;
+    set in ``phases``) over its first ``count`` listed pairs (the awake ones, with sleeping);
     arguments as ``step_world``'s."""
-    count = pairs.pair_count[w]
     pair_a, pair_b, impulse = pairs.pair_a[w], pairs.pair_b[w], pairs.pair_impulse[w]
-    if c.sleep and not any_awake_pair(pair_a, pair_b, count, asleep):
-        count = 0  # every pair's body sleeps: the pair phases have nothing to do
     if phases & COLLISION_PHASE and c.collision_passes > 0 and count > 0:
         resolve_world_contacts(s, m, geo, w, pair_a, pair_b, count, impulse, dt, COLLISION,
-                               c.collision_passes, scratch, asleep)
+                               c.collision_passes, scratch)
     if phases & VELOCITY_PHASE:
         update_world_velocities(w, s.velocity, s.angular_momentum, s.angular_velocity,
                                 s.rotation, s.force, s.torque, m.inverse_mass,
                                 m.inverse_moments, m.motion, m.gravity, dt)
     if phases & CONTACT_PHASE and c.contact_passes > 0 and count > 0:
         resolve_world_contacts(s, m, geo, w, pair_a, pair_b, count, impulse, dt, CONTACT,
-                               c.contact_passes, scratch, asleep)
+                               c.contact_passes, scratch)
     if phases & SHOCK_PHASE and c.shock_sweeps > 0 and c.gravity > 0.0 and count > 0:
         propagate_world_shock(s, m, geo, w, pair_a, pair_b, count, impulse, dt, c.up,
-                              c.shock_sweeps, scratch, wide, graph, asleep)
+                              c.shock_sweeps, scratch, wide, graph)
 
 
 @kernel
