@@ -113,8 +113,8 @@ class SuctionGripper:
         object it holds, would rest on the table or on the top of a free object under it
         (``kernels/footprint.lowest_centre``; one world of ``_lowest_centres``)."""
         lowest = np.empty(1)
-        _lowest_centres([self], target[None], self.world.position[None],
-                        self.world.rotation[None], lowest)
+        _lowest_centres(self, target[None], self.world.position[None],
+                        self.world.rotation[None], [self.held], lowest)
         return float(lowest[0])
 
 
@@ -130,7 +130,9 @@ def command_all(world, grippers: list[SuctionGripper], motions: np.ndarray,
     position = s.position[:, body]
     target = first.workspace.clip(position + STEP_DISTANCE * motions)
     lowest = np.empty(len(grippers))
-    _lowest_centres(grippers, target, s.position, s.rotation, lowest)
+    # without a grip command nothing is ever held: no need to ask every gripper
+    held = None if grips is None else [g.held for g in grippers]
+    _lowest_centres(first, target, s.position, s.rotation, held, lowest)
     target[:, 2] = np.maximum(target[:, 2], np.minimum(position[:, 2], lowest))
     s.velocity[:, body] = (target - position) / first.step_time  # it never turns
     if grips is not None:
@@ -138,13 +140,15 @@ def command_all(world, grippers: list[SuctionGripper], motions: np.ndarray,
             gripper._grip(grip)
 
 
-def _lowest_centres(grippers: list[SuctionGripper], targets: np.ndarray, positions: np.ndarray,
-                    rotations: np.ndarray, out: np.ndarray) -> None:
-    """``SuctionGripper._lowest_centre`` of gripper i at targets[i] (B, 3) m in world i of
-    positions (B, n, 3) and rotations (B, n, 3, 3), into out (B,) m; the grippers drive the
-    same body and objects (``kernels/footprint.lowest_centres``)."""
-    first = grippers[0]
-    held = np.array([-1 if g.held is None else g.held for g in grippers], dtype=np.int64)
+def _lowest_centres(first: SuctionGripper, targets: np.ndarray, positions: np.ndarray,
+                    rotations: np.ndarray, held: list | None, out: np.ndarray) -> None:
+    """``SuctionGripper._lowest_centre`` of the gripper of world i at targets[i] (B, 3) m in
+    world i of positions (B, n, 3) and rotations (B, n, 3, 3), into out (B,) m; every world's
+    gripper drives the same body and objects as ``first``. held: each gripper's held object
+    (an index into its objects, or None), or None when none holds anything
+    (``kernels/footprint.lowest_centres``)."""
+    held = (np.full(len(out), -1, dtype=np.int64) if held is None else
+            np.array([-1 if h is None else h for h in held], dtype=np.int64))
     lowest_centres(targets, positions, rotations, first.body, np.array(PAD_HALF_EXTENTS),
                    np.asarray(first.objects, dtype=np.int64), first.half_extents, held,
                    *first._work, out)

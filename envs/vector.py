@@ -76,6 +76,8 @@ class RigidGymVectorEnv(VectorEnv):
         self.elapsed = np.zeros(self.num_envs, dtype=np.int64)
         self.goals = np.zeros((self.num_envs, first.goal_size))
         """Every copy's goal (B, goal_size), kept as each copy resets."""
+        self.grippers = [env.gripper for env in self.envs]
+        """Every copy's SuctionGripper (a reset makes a new one), kept as each copy resets."""
 
     def reset(self, *, seed: int | list | None = None, options: dict | None = None):
         """Reset every copy; ``seed``: None, an int (copy i gets seed + i) or one per copy."""
@@ -90,6 +92,7 @@ class RigidGymVectorEnv(VectorEnv):
         for i, env in enumerate(self.envs):
             observation, info = env.reset(seed=seeds[i], options=options)
             self.goals[i] = env.goal
+            self.grippers[i] = env.gripper
             observations.append(observation)
             infos = self._add_info(infos, info, i)
         self.elapsed[:] = 0
@@ -108,7 +111,7 @@ class RigidGymVectorEnv(VectorEnv):
                              f"are refused); copies {bad} are not")
         actions = np.clip(actions, -1.0, 1.0)  # as the single env: outside [-1, 1] is clipped
         grips = actions[:, 3] if self.envs[0].has_grip else None
-        command_all(self.world, [env.gripper for env in self.envs], actions[:, :3], grips)
+        command_all(self.world, self.grippers, actions[:, :3], grips)
         self.world.step(SOLVER_STEPS)  # every copy in one kernel call, held objects carried in it
         self.elapsed += 1
         observations, rewards, terminated, successes = self._outcomes()
@@ -120,6 +123,7 @@ class RigidGymVectorEnv(VectorEnv):
             infos = self._add_info(infos, {"final_obs": final_obs, "final_info": final_info}, i)
             observation, reset_info = self.envs[i].reset()
             self.goals[i] = self.envs[i].goal
+            self.grippers[i] = self.envs[i].gripper
             for key, value in observation.items():
                 observations[key][i] = value
             successes[i] = reset_info["is_success"]
