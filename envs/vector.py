@@ -90,9 +90,7 @@ class RigidGymVectorEnv(VectorEnv):
                                  f"{self.num_envs} seeds, got {len(seeds)}")
         observations, infos = [], {}
         for i, env in enumerate(self.envs):
-            observation, info = env.reset(seed=seeds[i], options=options)
-            self.goals[i] = env.goal
-            self.grippers[i] = env.gripper
+            observation, info = self._reset_copy(i, seed=seeds[i], options=options)
             observations.append(observation)
             infos = self._add_info(infos, info, i)
         self.elapsed[:] = 0
@@ -121,9 +119,7 @@ class RigidGymVectorEnv(VectorEnv):
             final_info = {"is_success": bool(successes[i])}
             final_obs = {key: value[i].copy() for key, value in observations.items()}
             infos = self._add_info(infos, {"final_obs": final_obs, "final_info": final_info}, i)
-            observation, reset_info = self.envs[i].reset()
-            self.goals[i] = self.envs[i].goal
-            self.grippers[i] = self.envs[i].gripper
+            observation, reset_info = self._reset_copy(i)
             for key, value in observation.items():
                 observations[key][i] = value
             successes[i] = reset_info["is_success"]
@@ -132,13 +128,22 @@ class RigidGymVectorEnv(VectorEnv):
         infos["_is_success"] = np.ones(self.num_envs, dtype=bool)
         return observations, rewards, terminated, truncated, infos
 
+    def _reset_copy(self, i: int, **kwargs):
+        """Reset copy i (``kwargs``: its reset's seed and options) and keep its new goal and
+        gripper; returns its reset's (observation, info)."""
+        env = self.envs[i]
+        result = env.reset(**kwargs)
+        self.goals[i] = env.goal
+        self.grippers[i] = env.gripper
+        return result
+
     def _outcomes(self):
         """Every copy's step result at once, as ``RigidGymEnv.outcome`` gives each:
         observations (dict of (B, ...) arrays), rewards (B,), terminated (B,) and successes
         (B,) bool."""
         first = self.envs[0]
         s = self.world
-        held = np.array([env.gripper.held is not None for env in self.envs]) \
+        held = np.array([gripper.held is not None for gripper in self.grippers]) \
             if first.has_grip else None
         vectors, achieved = observe(s.position, s.velocity, s.rotation, s.angular_velocity,
                                     first.gripper.body, first.cubes, held)

@@ -357,7 +357,7 @@ class World:
             if m.motion[i] != DYNAMIC:
                 raise ValueError(f"World.set_material: {name} is not dynamic (infinite mass); "
                                  "only a dynamic body's mass can be set")
-            value = self._scalars(mass, "mass", "set_material", worlds, 0.0, np.inf, "(0, inf)")
+            value = self._scalars(mass, "mass", "set_material", worlds, 0.0, np.inf, open_low=True)
             spec = self.scene.bodies[i]
             omega = self.state.angular_velocity[worlds, i].copy()
             m.inverse_mass[worlds, i] = 1.0 / value
@@ -365,10 +365,9 @@ class World:
             self._set_angular_velocity(i, worlds, omega)
         if friction is not None:
             m.friction[worlds, i] = self._scalars(friction, "friction", "set_material", worlds,
-                                                  0.0, np.inf, "[0, inf)")
+                                                  0.0, np.inf)
         if restitution is not None:
-            value = self._scalars(restitution, "restitution", "set_material", worlds, 0.0, 1.0,
-                                  "[0, 1]")
+            value = self._scalars(restitution, "restitution", "set_material", worlds, 0.0, 1.0)
             if np.any(value > 0.0) and self._config_from_scene \
                     and self.config.collision_passes == 0:
                 raise ValueError(f"World.set_material: restitution > 0 for {name} needs the "
@@ -475,22 +474,20 @@ class World:
             raise ValueError(f"World.{method}: {field} must be finite, got {arr.tolist()}")
         return arr
 
-
     def _scalars(self, value, field: str, method: str, worlds, low: float, high: float,
-                 allowed: str) -> np.ndarray:
+                 open_low: bool = False) -> np.ndarray:
         """``value`` as a float64 scalar, or (B,) for every world when ``worlds`` is all of
-        them, checked to lie in [low, high] (``allowed``: the range as the message gives it;
-        an open end excludes its bound)."""
+        them, checked to lie in [low, high] ((low, high] with ``open_low``)."""
         arr = np.asarray(value, dtype=np.float64)
         shapes = [()] + ([(self.num_worlds,)] if worlds == slice(None) else [])
         if arr.shape not in shapes:
             raise ValueError(f"World.{method}: {field} must have shape "
                              f"{' or '.join(map(str, shapes))}, got {arr.shape}")
-        inside = np.isfinite(arr) & (arr <= high)
-        inside &= (arr > low) if allowed.startswith("(") else (arr >= low)
-        if not np.all(inside):
-            raise ValueError(f"World.{method}: {field} must be finite and in {allowed}, "
-                             f"got {arr.tolist()}")
+        above_low = arr > low if open_low else arr >= low
+        if not np.all(np.isfinite(arr) & above_low & (arr <= high)):
+            upper = "inf)" if np.isinf(high) else f"{high:g}]"
+            raise ValueError(f"World.{method}: {field} must be finite and in "
+                             f"{'(' if open_low else '['}{low:g}, {upper}, got {arr.tolist()}")
         return arr
 
 

@@ -161,18 +161,6 @@ def keep_rest_impulses(w, pair_a, pair_b, count, pair_impulse, rest):
 
 
 @kernel(inline=True)
-def restore_asleep(w, velocity, angular_momentum, angular_velocity, kept, asleep):
-    """Put the asleep bodies' velocity, angular momentum and angular velocity (B, n, 3) back
-    to kept (3, n, 3) (the step's start: the velocity update gave them gravity's share)."""
-    for i in range(asleep.shape[0]):
-        if asleep[i]:
-            for c in range(3):
-                velocity[w, i, c] = kept[0, i, c]
-                angular_momentum[w, i, c] = kept[1, i, c]
-                angular_velocity[w, i, c] = kept[2, i, c]
-
-
-@kernel(inline=True)
 def wake_world(w, rest, count):
     """No body of world w sleeps in the rest of this step (all its ``count`` pairs are awake)
     or in the next."""

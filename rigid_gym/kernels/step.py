@@ -24,7 +24,6 @@ from rigid_gym.kernels.rest import (
     keep_rest_impulses,
     mark_asleep,
     move_asleep_last,
-    restore_asleep,
     wake_world,
 )
 from rigid_gym.kernels.solver import (
@@ -115,9 +114,11 @@ def step_world(w, steps, phases, dt, state, model, geo, pairs, scratch, wide, gr
         impulse_phases(w, phases, dt, s, m, geo, pairs, scratch, wide, graph, c,
                        rest.awake_pairs[w])
         if phases & POSITION_PHASE:
-            if c.sleep:
-                restore_asleep(w, s.velocity, s.angular_momentum, s.angular_velocity,
-                               pairs.start[w], rest.asleep[w])
+            if c.sleep:  # the velocity update gave the asleep bodies gravity's share
+                for i in range(rest.asleep.shape[1]):
+                    if rest.asleep[w, i]:
+                        keep_body_velocities(s.velocity[w], s.angular_momentum[w],
+                                             s.angular_velocity[w], pairs.start[w], False, i)
             if c.broad_phase:
                 for _ in range(MAX_RELISTS):
                     if not outgrown(w, dt, s, geo, pairs.reach[w]):
@@ -189,15 +190,21 @@ def keep_velocities(velocity, angular_momentum, angular_velocity, kept, keep):
     """Copy one world's velocity, angular momentum and angular velocity (n, 3) each into
     kept (3, n, 3) when ``keep``, else back from it."""
     for i in range(velocity.shape[0]):
-        for k in range(3):
-            if keep:
-                kept[0, i, k] = velocity[i, k]
-                kept[1, i, k] = angular_momentum[i, k]
-                kept[2, i, k] = angular_velocity[i, k]
-            else:
-                velocity[i, k] = kept[0, i, k]
-                angular_momentum[i, k] = kept[1, i, k]
-                angular_velocity[i, k] = kept[2, i, k]
+        keep_body_velocities(velocity, angular_momentum, angular_velocity, kept, keep, i)
+
+
+@kernel(inline=True)
+def keep_body_velocities(velocity, angular_momentum, angular_velocity, kept, keep, i):
+    """``keep_velocities`` for body i alone."""
+    for k in range(3):
+        if keep:
+            kept[0, i, k] = velocity[i, k]
+            kept[1, i, k] = angular_momentum[i, k]
+            kept[2, i, k] = angular_velocity[i, k]
+        else:
+            velocity[i, k] = kept[0, i, k]
+            angular_momentum[i, k] = kept[1, i, k]
+            angular_velocity[i, k] = kept[2, i, k]
 
 
 @kernel(inline=True)
