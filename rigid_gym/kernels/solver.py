@@ -246,7 +246,7 @@ def restitution_for(model, w, a, b, mode, ramp_e):
     return 0.0
 
 
-@kernel
+@kernel(inline=True)
 def resolve_pair(state, model, geo, w, k, a, b, dt, lookahead, mode, ramp_e, movable_a,
                  movable_b, scratch, accumulated):
     """Resolve the contacts of the pair (a, b) at their predicted poses (``resolve_patches``);
@@ -263,7 +263,7 @@ def resolve_pair(state, model, geo, w, k, a, b, dt, lookahead, mode, ramp_e, mov
                            accumulated)
 
 
-@kernel
+@kernel(inline=True)
 def resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mode, ramp_e,
                     accumulated):
     """Resolve body a's contacts in scratch (normals towards a; each against the body
@@ -338,7 +338,7 @@ def resolve_patches(state, model, w, a, movable_a, movable_b, scratch, count, mo
     return applied
 
 
-@kernel
+@kernel(inline=True)
 def resolve_supported_body(state, model, geo, w, body, current, pair_a, pair_b, dt, scratch,
                            wide, graph, accumulated):
     """Shock propagation for one body of the level being processed against all its frozen
