@@ -29,7 +29,7 @@ only; the numba thread count matters for batched worlds.
     python benchmarks/speed.py --quick           # smoke run with small counts, about 15 s
     python benchmarks/speed.py --repeats 9       # more timings per median (default 5)
 
-Times exclude numba compiling (the first run of a process after a kernel change: 1-3 min).
+Times exclude numba compiling (the first run of a process after a kernel change: 2-4 min).
 """
 
 import argparse
