@@ -35,7 +35,6 @@ L / (2k) < h / 2, i.e. for boxes whose edges are shorter than k of the mesh's gr
     python benchmarks/box_edge_samples.py
 """
 
-import numba
 import numpy as np
 
 import rigid_gym as rg
@@ -94,7 +93,6 @@ def percent(x: float) -> str:
 
 
 def main() -> None:
-    numba.set_num_threads(1)  # one world: see benchmarks/collision.py
     rng = np.random.default_rng(0)
     places = rng.uniform(-0.45 * EDGE, 0.45 * EDGE, (PLACES, 2))
     mesh = box_mesh((HALF, HALF, HALF))

@@ -3,28 +3,23 @@
 Scenes: N boxes (half extents 0.095-0.105 m, turned a little about random axes) on a jittered
 lattice 0.2 m apart, in a few layers (1 for N = 10, 2 for 100, 4 for 1000) resting 1-2 mm
 into the ground and into each other, so every box touches its neighbours, as in a settled
-pile. For each N it times ``Collider.detect`` (broad phase + narrow phase, what
-``World.contacts`` runs before copying) and ``Collider.find_pairs`` (broad phase alone), with
-sort-and-sweep (``SolverConfig(sweep=True)``) and brute force (``sweep=False``); times are
-medians of several runs, each the mean of a batch of calls, after a warm-up call (compiling
-and growing the buffers). Then:
+pile. For each N it times ``World.contacts`` (broad phase + narrow phase, the rows copied out)
+and ``World.candidate_pairs`` (broad phase alone), with sort-and-sweep
+(``SolverConfig(sweep=True)``) and brute force (``sweep=False``); times are medians of several
+runs, each the mean of a batch of calls, after a warm-up call. Then:
 
   growth exponent   the least-squares slope of log(time) against log(N) over N = 10..1000;
   crossover         the smallest N from which sort-and-sweep's broad phase is faster than
                     brute force's at every larger N measured (the narrow phase is the same
                     work for both): the honest value for ``collision.SWEEP_MIN_BODIES``.
 
-Threads: the kernels parallelise over worlds only, so one world runs on one core; the benchmark
-sets numba to one thread, because otherwise every parallel kernel call waits at the thread
-pool's barrier, which on a busy machine costs a scheduler tick (measured: 8 ms per call for
-any N with 2 threads while another process kept both cores busy).
+Threads: a query runs on the calling thread (one world, one core).
 
     python benchmarks/collision.py
 """
 
 import time
 
-import numba
 import numpy as np
 
 import rigid_gym as rg
@@ -76,15 +71,12 @@ def seconds_per_call(fn, budget: float = 0.3, runs: int = 7) -> float:
 
 
 def measure(n: int, sweep: bool, what: str) -> tuple[float, int, int]:
-    """(seconds per call, candidate pairs, contacts) of detect or find_pairs for an n-box pile."""
+    """(seconds per call, candidate pairs, contacts) of contacts or candidate_pairs (``what``:
+    "detect" or "pairs") for an n-box pile."""
     world = rg.World(pile(n), config=rg.SolverConfig(sweep=sweep))
-    collider, state = world.collider, world.state
-    collider.detect(state)
-    if what == "detect":
-        t = seconds_per_call(lambda: collider.detect(state))
-    else:
-        t = seconds_per_call(lambda: collider.find_pairs(state, 0.0))
-    return t, int(collider.pair_count[0]), int(collider.contact_count[0])
+    query = world.contacts if what == "detect" else world.candidate_pairs
+    t = seconds_per_call(query)
+    return t, len(world.candidate_pairs()), len(world.contacts().depth)
 
 
 def slope(sizes, times) -> float:
@@ -92,9 +84,6 @@ def slope(sizes, times) -> float:
 
 
 def main() -> None:
-    numba.set_num_threads(1)
-    measure(4, True, "detect")  # compile both variants
-    measure(4, False, "detect")
 
     print("## Contact generation per step (one world, one core)\n")
     print("| boxes | layers | pairs | contacts | detect, sweep (ms) | detect, brute (ms) "

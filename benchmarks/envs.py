@@ -62,7 +62,7 @@ def steps_per_second(env_id: str, steps: int, repeats: int) -> float:
             if terminated or truncated:
                 env.reset()
 
-    run(100)  # warm-up: numba kernels compiled or loaded from the cache
+    run(100)  # warm-up: first allocations and caches
     rates = []
     for _ in range(repeats):
         start = time.perf_counter()
@@ -75,7 +75,7 @@ def steps_per_second(env_id: str, steps: int, repeats: int) -> float:
 def frame_milliseconds(env_id: str, frames: int = 20) -> float:
     env = gym.make(env_id, render_mode="rgb_array")
     env.reset(seed=0)
-    env.render()  # first frame: compiles the rasteriser, tessellates the shapes
+    env.render()  # first frame: tessellates the shapes
     times = []
     for _ in range(frames):
         env.step(env.action_space.sample())

@@ -6,8 +6,8 @@ random points in the bounding box) prints a markdown table of
   mass error     |M - M_exact| / M_exact
   inertia error  |I - I_exact|_F / |I_exact|_F (Frobenius norm, tensors about each one's centre)
                  (Monte Carlo: root mean square over seeds 0-4, so the trend is not one draw's)
-  ms             wall time of one estimate, median of 3 runs after a warm-up call (so numba
-                 compilation is not counted)
+  ms             wall time of one estimate, median of 3 runs after a warm-up call (so
+                 one-time costs are not counted)
 and then the observed convergence order: the least-squares slope of log(error) against
 log(points), leaving out errors at round-off level (1e-13, ``rigid_gym.report.accuracy``; "exact": the grid and Monte Carlo masses of
 a box, whose bounding box is the box itself). What to expect: -1/2 for Monte Carlo. For the
@@ -60,7 +60,7 @@ def main():
     rows, orders = [], []
     for name, shape in SHAPES.items():
         exact = mass_properties(shape, DENSITY)
-        mass_properties_grid(shape, DENSITY, 4)  # warm-up: compiles or loads the mesh kernels
+        mass_properties_grid(shape, DENSITY, 4)  # warm-up: starts the core's worker threads
         by_method = {}
         for method, points, seeds, estimate in estimators():
             mass_err, inertia_err = errors([estimate(shape, seed) for seed in seeds], exact)

@@ -108,7 +108,7 @@ def measure(env_id: str, repeats: int, episodes: int, folder: Path) -> dict:
     seeds = range(episodes)
     envs = {"bare": make(env_id, None), "recorded": make(env_id, folder)}
     for env, _ in envs.values():
-        run_episodes(env, [0])  # warm-up: numba caches, first allocations, shared layout
+        run_episodes(env, [0])  # warm-up: first allocations, the shared layout
     writer_start = cpu_seconds(writer().process.pid)
     for repeat in range(repeats):
         order = ("bare", "recorded") if repeat % 2 == 0 else ("recorded", "bare")

@@ -45,7 +45,7 @@ def run(order: int, dt: float) -> tuple[float, float, float]:
 
 
 def main() -> None:
-    run(1, 0.1)  # compile
+    run(1, 0.1)  # warm-up
     print("| order | dt (s) | energy error | ratio | omega error (rad/s) | ratio | us/step |")
     print("|---|---|---|---|---|---|---|")
     for order in (1, 2, 3):

@@ -48,7 +48,7 @@ def main() -> None:
     variants = [("default", {}), ("no contact phase", {"contact_passes": 0}),
                 ("no shock propagation", {"shock_sweeps": 0}),
                 ("neither", {"contact_passes": 0, "shock_sweeps": 0})]
-    steps_per_second(cube_stack(2), None, 2, 2, 1)  # compile outside the timings
+    steps_per_second(cube_stack(2), None, 2, 2, 1)  # warm-up outside the timings
     print("| scene | bodies | " + " | ".join(name for name, _ in variants) + " |")
     print("|---|---|" + "---|" * len(variants))
     growth = []

@@ -21,15 +21,14 @@
    resets in it); "not available" where a task registers no vector entry point.
 
 The header line names the machine and the versions. One world runs on the calling thread
-only; the numba thread count matters for batched worlds.
+only; batched worlds are shared out over the core's threads (``rigid_gym._core.num_threads``,
+at most ``RIGID_GYM_NUM_THREADS``).
 
     python benchmarks/speed.py                   # all three sections, about 4 minutes on 2 cores
                                                  # (half of it MuJoCo's 1000-body pile)
     python benchmarks/speed.py --only solver     # one section: solver, envs or batched
     python benchmarks/speed.py --quick           # smoke run with small counts, about 15 s
     python benchmarks/speed.py --repeats 9       # more timings per median (default 5)
-
-Times exclude numba compiling (the first run of a process after a kernel change: 2-4 min).
 """
 
 import argparse
@@ -42,11 +41,11 @@ import time
 from pathlib import Path
 
 import gymnasium as gym
-import numba
 import numpy as np
 
 import rigid_gym as rg
-from rigid_gym.kernels.integrate import DYNAMIC
+from rigid_gym import _core
+from rigid_gym._core import DYNAMIC
 from rigid_gym.report import peers
 from rigid_gym.report.scenes import cube_stack, pile, pyramid
 
@@ -60,7 +59,7 @@ ENGINES = ("ours", *PEERS)
 BATCH_SIZES = (1, 16, 256, 1024)
 QUICK_BATCH_SIZES = (1, 16)
 BATCH_WARMUP = 5
-"""Untimed vector steps before the timings (numba compiles the batched kernels here)."""
+"""Untimed vector steps before the timings (first allocations, caches)."""
 
 
 def load_env_benchmark():
@@ -95,8 +94,8 @@ def version(package: str) -> str:
 
 
 def machine_line() -> str:
-    return (f"Machine: {cpu_model()}, {os.cpu_count()} cores, {numba.get_num_threads()} numba "
-            f"threads; Python {platform.python_version()}, numba {numba.__version__}, numpy "
+    return (f"Machine: {cpu_model()}, {os.cpu_count()} cores, {_core.num_threads()} solver "
+            f"threads; Python {platform.python_version()}, rigid_gym {version('rigid_gym')}, numpy "
             f"{np.__version__}, gymnasium {gym.__version__}; mujoco {version('mujoco')}, "
             f"pybullet {version('pybullet')}, panda-gym {version('panda-gym')}")
 

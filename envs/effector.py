@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigid_gym.kernels.footprint import lowest_centres
+from rigid_gym._core import lowest_centres
 from rigid_gym.shapes import Box
 
 STEP_DISTANCE = 0.05
@@ -111,7 +111,7 @@ class SuctionGripper:
     def _lowest_centre(self, target: np.ndarray) -> float:
         """The lowest z the gripper's centre may take at ``target``'s x, y: where it, or the
         object it holds, would rest on the table or on the top of a free object under it
-        (``kernels/footprint.lowest_centre``; one world of ``_lowest_centres``)."""
+        (``src/footprint.h``; one world of ``_lowest_centres``)."""
         lowest = np.empty(1)
         _lowest_centres(self, target[None], self.world.position[None],
                         self.world.rotation[None], [self.held], lowest)
@@ -146,7 +146,7 @@ def _lowest_centres(first: SuctionGripper, targets: np.ndarray, positions: np.nd
     world i of positions (B, n, 3) and rotations (B, n, 3, 3), into out (B,) m; every world's
     gripper drives the same body and objects as ``first``. held: each gripper's held object
     (an index into its objects, or None), or None when none holds anything
-    (``kernels/footprint.lowest_centres``)."""
+    (``src/footprint.h``)."""
     held = (np.full(len(out), -1, dtype=np.int64) if held is None else
             np.array([-1 if h is None else h for h in held], dtype=np.int64))
     lowest_centres(targets, positions, rotations, first.body, np.array(PAD_HALF_EXTENTS),

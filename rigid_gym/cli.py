@@ -33,8 +33,8 @@ import numpy as np
 
 
 def timed_steps(world, steps: int) -> float:
-    """Step ``world`` ``steps`` times; return steps/s, the first step (which may compile the
-    kernels on a fresh install) left out of the timing."""
+    """Step ``world`` ``steps`` times; return steps/s, the first step (which sizes the pair
+    buffers) left out of the timing."""
     world.step(1)
     start = time.perf_counter()
     world.step(steps - 1)

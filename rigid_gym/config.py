@@ -12,6 +12,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rigid_gym._core import DYNAMIC
+
 if TYPE_CHECKING:
     from rigid_gym.scene import Scene
 
@@ -27,7 +29,7 @@ class SolverConfig:
     contact_passes: sweeps of the contact phase (restitution ramping from -0.9 to 0).
     shock_sweeps: sweeps per level of shock propagation; 0 switches it off. It only matters
         where a body can rest on another (or on the ground) under gravity; resting contact
-        is made exact there (``kernels/patch.py``).
+        is made exact there (``src/patch.h``).
     rotation_order: 1 = the exact-rotation update of the course notes with omega at the start
         of the step (first order); 2 = Buss's second-order update (omega + h/2 alpha);
         3 = Buss's third-order update. Cost grows slightly with the order.
@@ -37,7 +39,7 @@ class SolverConfig:
     sweep: broad phase by sort-and-sweep (True) or brute force (False); None chooses
         sort-and-sweep from ``collision.SWEEP_MIN_BODIES`` bounded bodies.
     sleep: skip a body resting alone on a static or kinematic one while its step is a fixed
-        point (``kernels/rest.py``); exact, so off only to measure what it saves.
+        point (``src/sleep.h``); exact, so off only to measure what it saves.
     """
 
     collision_passes: int = 5
@@ -70,8 +72,6 @@ class SolverConfig:
         no collision phase when every restitution is 0; no shock propagation without gravity
         or when nothing can rest on anything (no dynamic body, or one alone in empty space).
         ``overrides`` (any field) win over both."""
-        from rigid_gym.kernels.integrate import DYNAMIC
-
         known = {f.name for f in fields(cls)}
         unknown = set(overrides) - known
         if unknown:

@@ -1,8 +1,8 @@
-"""Compile a scene's shapes into the flat arrays the collision kernels read.
+"""Compile a scene's shapes into the flat arrays the core's collision detection reads.
 
 Every body becomes one or more *geoms* (a Compound contributes one per part), each a primitive
 placed in the body's principal frame. Following Guendelman, Bridson & Fedkiw 2003, a geom
-answers a signed distance phi (``kernels/geometry.py``) and carries *surface samples*:
+answers a signed distance phi (``src/geometry.h``) and carries *surface samples*:
 
     Box    its 8 corners plus ``edge_segments - 1`` points inside each edge, so that edge-edge
            crossings are seen (measured in benchmarks/box_edge_samples.py)
@@ -27,10 +27,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from rigid_gym import _core
 from rigid_gym import quaternion as quat
-from rigid_gym.kernels import geometry as kg
-from rigid_gym.kernels import mesh as mesh_kernels
-from rigid_gym.kernels.narrowphase import BOX_CORNERS, BOX_EDGES
+from rigid_gym._core import BOX_CORNERS, BOX_EDGES, CAPSULE_CORE_SAMPLES
 from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
 
 GRID_PADDING_CELLS = 2
@@ -111,7 +110,7 @@ def mesh_grid(mesh: Mesh) -> _Grid:
     axes = [origin[k] + spacing * np.arange(shape[k]) for k in range(3)]
     nodes = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
     values = np.empty(len(nodes))
-    mesh_kernels.signed_distance(np.ascontiguousarray(nodes), mesh.vertices, mesh.triangles, values)
+    _core.signed_distance(np.ascontiguousarray(nodes), mesh.vertices, mesh.triangles, values)
     for shared in (shape, origin, values):
         shared.setflags(write=False)
     return _Grid(shape, origin, spacing, values)
@@ -150,7 +149,8 @@ def _edge_points(vertices: np.ndarray, edges, segments: int) -> np.ndarray:
     return np.concatenate([vertices[a] + t * (vertices[b] - vertices[a]) for a, b in edges])
 
 
-GEOM_TYPES = {Sphere: kg.SPHERE, Capsule: kg.CAPSULE, Box: kg.BOX, Mesh: kg.MESH, Plane: kg.PLANE}
+GEOM_TYPES = {Sphere: _core.SPHERE, Capsule: _core.CAPSULE, Box: _core.BOX, Mesh: _core.MESH,
+              Plane: _core.PLANE}
 
 
 def _size(shape) -> list[float]:
@@ -252,8 +252,6 @@ def max_pair_contacts(geometry: Geometry) -> int:
     """An upper bound on the contacts ``collide_bodies`` can return for any pair of bodies, so
     solver buffers sized by it never overflow: per geom pair at most the samples of both geoms
     plus 8 (box-box clipping) plus the capsule core samples."""
-    from rigid_gym.kernels.narrowphase import CAPSULE_CORE_SAMPLES
-
     per_geom = np.diff(geometry.sample_start) + 8 + CAPSULE_CORE_SAMPLES
     per_body = np.add.reduceat(per_geom, geometry.body_geom_start[:-1]) if len(per_geom) else per_geom
     geoms = np.diff(geometry.body_geom_start)

@@ -72,7 +72,7 @@ import numpy as np
 from rerun.chunk import RrdReader
 
 from rigid_gym.envs.base import RigidGymEnv
-from rigid_gym.kernels.integrate import STATIC
+from rigid_gym._core import STATIC
 from rigid_gym.recording_writer import Writer, blueprint_path, row_columns, writer
 from rigid_gym.render import MARKER_COLOR
 from rigid_gym.shapes import Plane, Pose
@@ -464,10 +464,7 @@ def _contacts(world, index: int, force_scale: float):
     that exchanged an impulse in the last solver step and still touches, an arrow origin
     (the centroid of its points) and vector (its mean force on its first body x
     ``force_scale``), (p, 3) each, m."""
-    collider = world.collider
-    count = int(collider.pair_count[index])
-    pairs = np.stack([collider.pair_a[index, :count], collider.pair_b[index, :count]], axis=1)
-    impulses = collider.pair_impulse[index, :count].copy()  # before contacts() reuses buffers
+    pairs, impulses = world.listed_pairs(index)
     found = world.contacts(margin=CONTACT_MARGIN)
     mine = found.world == index
     points, a, b = found.point[mine], found.body_a[mine], found.body_b[mine]

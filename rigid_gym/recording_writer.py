@@ -60,7 +60,7 @@ import rerun.blueprint as rrb
 from rerun.chunk import Chunk, ChunkStore
 
 from rigid_gym import quaternion as quat
-from rigid_gym.kernels.integrate import STATIC
+from rigid_gym._core import STATIC
 from rigid_gym.render import _body_colors, _corner_normals, tessellate
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere

@@ -6,7 +6,7 @@
 
 Every shape is tessellated once into a closed triangle mesh in its shape frame (a Plane into a
 finite, tiled square patch: a table top); each frame moves the triangles with the body poses
-and draws them with a z-buffer (``rigid_gym.kernels.raster``): a perspective camera, back-face
+and draws them with a z-buffer (the core's ``src/raster.cpp``): a perspective camera, back-face
 culling, Gouraud-interpolated Lambert shading from one directional light plus ambient, and the
 bodies' shadows from an orthographic shadow map. Translucent markers (alpha < 1) are blended
 over the opaque scene, nearest one per pixel. Output is deterministic: the same input gives the
@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rigid_gym import _core
 from rigid_gym import quaternion as quat
-from rigid_gym.kernels import raster
-from rigid_gym.kernels.integrate import DYNAMIC, KINEMATIC
+from rigid_gym._core import DYNAMIC, KINEMATIC
 from rigid_gym.meshes import _lathe, box_mesh
 from rigid_gym.scene import Scene, _vector
 from rigid_gym.shapes import (SOLID_SHAPES, Box, Capsule, Compound, Mesh, Plane, Sphere,
@@ -249,29 +249,29 @@ class Renderer:
         self._rotation[:n] = quat.to_matrix(q)
         self._translation[:n] = x
         p = self._packed
-        raster.transform(p.corners, p.normals, p.owner, self._rotation, self._translation,
-                         p.world, p.world_normal)
+        _core.raster_transform(p.corners, p.normals, p.owner, self._rotation,
+                               self._translation, p.world, p.world_normal)
         light_axes, origin, texel = self._draw_shadow_map()
         camera = self.camera
         eye, axes, focal = camera.eye, camera.axes(), camera.focal(self.height)
         (nearness, ids, diffuse), (layer_nearness, layer_ids, layer_diffuse) = self._buffers
         nearness.fill(0.0)
         ids.fill(-1)
-        raster.rasterize(p.world, p.world_normal, 0, p.num_opaque, eye, axes, focal, NEAR,
-                         self.light, nearness, ids, diffuse)
+        _core.rasterize(p.world, p.world_normal, 0, p.num_opaque, eye, axes, focal, NEAR,
+                        self.light, nearness, ids, diffuse)
         layer_ids.fill(-1)
         if p.num_opaque < p.num_triangles:
             layer_nearness[...] = nearness
-            raster.rasterize(p.world, p.world_normal, p.num_opaque, p.num_triangles, eye, axes,
-                             focal, NEAR, self.light, layer_nearness, layer_ids, layer_diffuse)
+            _core.rasterize(p.world, p.world_normal, p.num_opaque, p.num_triangles, eye, axes,
+                            focal, NEAR, self.light, layer_nearness, layer_ids, layer_diffuse)
         # shadow-map coordinates of eye + depth * axes.T @ (x, y, 1): texels, texels, m
         scale = np.array([1.0 / texel, 1.0 / texel, 1.0])[:, None]
         to_light = scale * (light_axes @ axes.T)
         light_offset = scale[:, 0] * (light_axes @ eye - origin)
         image = np.empty((self.height, self.width, 3), np.uint8)
-        raster.shade(nearness, ids, diffuse, layer_ids, layer_diffuse, p.colors, p.alpha, focal,
-                     to_light, light_offset, texel, self._shadow[0], AMBIENT,
-                     np.array(BACKGROUND), image)
+        _core.shade(nearness, ids, diffuse, layer_ids, layer_diffuse, p.colors, p.alpha, focal,
+                    to_light, light_offset, texel, self._shadow[0], AMBIENT,
+                    np.array(BACKGROUND), image)
         return image
 
     def _draw_shadow_map(self) -> tuple[np.ndarray, np.ndarray, float]:
@@ -290,7 +290,7 @@ class Renderer:
         texel = max((high[:2] - low[:2]).max() / (SHADOW_RESOLUTION - 4), 1e-9)
         origin = np.array([low[0] - 2.0 * texel, low[1] - 2.0 * texel, low[2] - 1.0])
         shadow.fill(0.0)  # the other two buffers are written, never read
-        raster.shadow_map(p.world, p.num_casters, light_axes, origin, texel, *self._shadow)
+        _core.shadow_map(p.world, p.num_casters, light_axes, origin, texel, *self._shadow)
         return light_axes, origin, texel
 
     def _pack(self) -> None:

@@ -18,7 +18,7 @@ import numpy as np
 
 from rigid_gym import quaternion as quat
 from rigid_gym.inertia import MassProperties, inverse_moments, mass_properties, principal_axes
-from rigid_gym.kernels.integrate import DYNAMIC, KINEMATIC, STATIC
+from rigid_gym._core import DYNAMIC, KINEMATIC, STATIC
 from rigid_gym.shapes import SOLID_SHAPES, Plane, Pose
 
 MOTION_NAMES = {STATIC: "static", KINEMATIC: "kinematic", DYNAMIC: "dynamic"}

@@ -6,7 +6,7 @@ Every shape answers a signed distance ``signed_distance(points)``: negative insi
 surface, positive outside (for a Mesh the magnitude is the distance to the nearest triangle).
 
 Construction validates the numbers and raises ``ValueError`` naming the shape and field, so a
-bad size never reaches a kernel.
+bad size never reaches the compiled core (``rigid_gym._core``).
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rigid_gym import _core
 from rigid_gym import quaternion as quat
 
 
@@ -181,11 +182,9 @@ class Mesh:
         Magnitude: exact distance to the nearest triangle. Sign: inside where the generalised
         winding number exceeds 1/2, so it is right for nonconvex meshes too.
         """
-        from rigid_gym.kernels import mesh as mesh_kernels
-
         p = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
         out = np.empty(len(p))
-        mesh_kernels.signed_distance(p, self.vertices, self.triangles, out)
+        _core.signed_distance(p, self.vertices, self.triangles, out)
         return out.reshape(np.shape(points)[:-1])
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:

@@ -6,8 +6,10 @@
 
 State is held per body at the centre of mass in the principal frame (see ``rigid_gym.scene``).
 Every array has a leading world axis internally; a world built without ``num_worlds`` shows it
-dropped. Arrays returned by properties are read-only views: change state with the setters,
-which validate their input.
+dropped. The arrays live in the compiled core (``World.core``, a ``rigid_gym._core.StepContext``
+that owns every buffer the step uses); ``World.state`` and ``World.model`` are numpy views of
+them. Arrays returned by properties are read-only views: change state with the setters, which
+validate their input before anything reaches the core.
 """
 
 from __future__ import annotations
@@ -17,14 +19,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rigid_gym import pipeline
-from rigid_gym.collision import Collider, Contacts
-from rigid_gym.geometry import compile_geometry, max_pair_contacts
+from rigid_gym import _core, pipeline
 from rigid_gym import quaternion as quat
+from rigid_gym._core import DYNAMIC, STATIC
+from rigid_gym.collision import Contacts, uses_sweep
 from rigid_gym.config import SolverConfig
-from rigid_gym.kernels import integrate
-from rigid_gym.kernels.integrate import DYNAMIC, STATIC
-from rigid_gym.kernels.step import Attachments
+from rigid_gym.geometry import compile_geometry, max_pair_contacts
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Compound, Mesh
 
@@ -47,6 +47,16 @@ class State(NamedTuple):
     rotation: np.ndarray
     force: np.ndarray
     torque: np.ndarray
+
+
+class Attachments(NamedTuple):
+    """Bodies held rigidly by another (``World.attach``), leading world axis B: parent (B, n)
+    int32 (-1: free), offset_position (B, n, 3) m in the parent's frame, offset_orientation
+    (B, n, 4) relative to the parent's."""
+
+    parent: np.ndarray
+    offset_position: np.ndarray
+    offset_orientation: np.ndarray
 
 
 class Model(NamedTuple):
@@ -99,21 +109,27 @@ class World:
         self.num_worlds = int(num_worlds) if self.batched else 1
         self.config = SolverConfig.for_scene(scene) if config is None else config
         self._config_from_scene = config is None
-        self.model = _build_model(scene, self.num_worlds)
-        self.geometry = compile_geometry(scene.bodies, self.config.box_edge_segments)
-        self.collider = Collider(self.geometry, self.model.motion, self.num_worlds,
-                                 self.config.sweep)
-        self.pair_contact_capacity = max_pair_contacts(self.geometry)
-        self.workspace = pipeline.Workspace(self.num_worlds, len(scene), self.pair_contact_capacity)
-        self.settings = pipeline.settings(self.config, self.model.gravity, self.collider.sweep)
         if not isinstance(profile, bool):
             raise ValueError(f"World.profile: must be True or False, got {profile!r}")
         self.profiling = profile
-        self.state = _build_state(scene, self.num_worlds)
-        n = len(scene)
-        self.attached = Attachments(np.full((self.num_worlds, n), -1, dtype=np.int32),
-                                    np.zeros((self.num_worlds, n, 3)),
-                                    np.zeros((self.num_worlds, n, 4)))
+        self.geometry = compile_geometry(scene.bodies, self.config.box_edge_segments)
+        motion = np.array([b.motion for b in scene.bodies], dtype=np.int32)
+        sweep = uses_sweep(self.geometry.body_unbounded, self.config.sweep)
+        self.core = _core.StepContext(self.num_worlds, self.geometry._asdict(), motion,
+                                      tuple(scene.gravity.tolist()),
+                                      pipeline.settings(self.config, scene.gravity, sweep),
+                                      max_pair_contacts(self.geometry))
+        c = self.core
+        self.state = State(c.position, c.orientation, c.velocity, c.angular_momentum,
+                           c.angular_velocity, c.rotation, c.force, c.torque)
+        self.model = Model(motion, c.inverse_mass, c.inverse_moments, c.friction, c.restitution,
+                           scene.gravity.copy())
+        self.attached = Attachments(c.attach_parent, c.attach_offset_position,
+                                    c.attach_offset_orientation)
+        for current, new in zip(self.model[1:5], _build_model(scene, self.num_worlds)[1:5]):
+            current[...] = new
+        for current, new in zip(self.state, _build_state(scene, self.num_worlds)):
+            current[...] = new
         self._refresh_derived()
         self._initial_state = tuple(a.copy() for a in self.state)
         self.steps = 0
@@ -143,7 +159,7 @@ class World:
         for current, initial in zip(self.state, self._initial_state):
             current[worlds] = initial[worlds]
         self.attached.parent[worlds] = -1
-        self.workspace.forget(worlds)
+        self.core.forget(*self._range(worlds))
         if world is None:
             self.steps = 0
 
@@ -170,7 +186,7 @@ class World:
         for current, new in zip(self.state, _build_state(scene, 1)):
             current[w] = new[0]
         self.attached.parent[w] = -1
-        self.workspace.forget(w)
+        self.core.forget(*self._range(w))
         if world is None or self.num_worlds == 1:
             self.steps = 0  # every world starts over
 
@@ -189,21 +205,17 @@ class World:
             "...ji,...j->...i", s.rotation[worlds, p], s.position[worlds, i] - s.position[worlds, p])
         self.attached.offset_orientation[worlds, i] = quat.multiply(inverse, s.orientation[worlds, i])
         self.attached.parent[worlds, i] = p
-        self.workspace.forget(worlds)
-        self._place_attached(worlds)
+        self.core.forget(*self._range(worlds))
+        self.core.place_attached(*self._range(worlds))
 
     def detach(self, body: int, world: int | None = None) -> None:
         """Let ``body`` go (``attach``): put at its place one last time, it leaves with its
         parent's current velocity."""
         i = self._body(body, "detach")
         worlds = self._worlds(world, "detach")
-        self._place_attached(worlds)
+        self.core.place_attached(*self._range(worlds))
         self.attached.parent[worlds, i] = -1
-        self.workspace.forget(worlds)
-
-    def _place_attached(self, worlds) -> None:
-        for index in range(self.num_worlds)[worlds] if isinstance(worlds, slice) else [worlds]:
-            pipeline.place_attached(self, index)
+        self.core.forget(*self._range(worlds))
 
     def view(self, world: int) -> WorldView:
         """One world of a batched World, seen as an unbatched one (``WorldView``)."""
@@ -298,9 +310,30 @@ class World:
         if not np.isfinite(margin) or margin < 0.0:
             raise ValueError(f"World.contacts: margin must be finite and >= 0 m, got {margin!r}")
         worlds = self._worlds(world, "contacts")
-        first = 0 if world is None else worlds
-        self.collider.detect(self.state, margin, worlds)
-        return self.collider.contacts(worlds, first)
+        return Contacts(*self.core.contacts(margin, *self._range(worlds)))
+
+    def candidate_pairs(self, margin: float = 0.0, world: int = 0) -> np.ndarray:
+        """(k, 2) body indices (a, b) of the pairs the broad phase lists in ``world`` at the
+        current poses, boxes grown by ``margin`` (m): the pairs ``contacts`` examines. a is
+        the body of higher motion class (dynamic > kinematic > static; ties: the lower index),
+        so contact normals point from the ground or a gripper towards what they touch."""
+        margin = float(margin)
+        if not np.isfinite(margin) or margin < 0.0:
+            raise ValueError(f"World.candidate_pairs: margin must be finite and >= 0 m, got "
+                             f"{margin!r}")
+        return self.core.candidate_pairs(margin, self._worlds(world, "candidate_pairs"))
+
+    def listed_pairs(self, world: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """The pairs the last step listed in ``world`` as (k, 2) body indices (a, b), and the
+        impulse each transmitted to its body a during that step, (k, 3) N s (zero for a pair
+        that did not touch); copies."""
+        a, b, impulse = self.core.pairs(self._worlds(world, "listed_pairs"))
+        return np.stack([a, b], axis=1), impulse
+
+    def sleeping(self) -> np.ndarray:
+        """([B,] n) bool: the bodies that slept through the last step (SolverConfig.sleep)."""
+        asleep = self.core.asleep.astype(bool)
+        return asleep if self.batched else asleep[0]
 
     def profile(self) -> dict[str, dict]:
         """Per phase, in step order: whether it runs, total seconds and calls so far (timed
@@ -350,7 +383,7 @@ class World:
         """
         i = self._body(body, "set_material")
         worlds = self._worlds(world, "set_material")
-        self.workspace.forget(worlds)
+        self.core.forget(*self._range(worlds))
         m = self.model
         name = f"body {i} ({self.scene.bodies[i].name!r})"
         if mass is not None:
@@ -438,13 +471,12 @@ class World:
         self._refresh_derived(worlds)
 
     def _refresh_derived(self, worlds=slice(None)) -> None:
-        """R(q) and omega = I^-1 L of ``worlds`` (a slice, or one world's index)."""
-        s, m = self.state, self.model
-        if not isinstance(worlds, slice):
-            worlds = slice(worlds, worlds + 1)
-        integrate.refresh_rotation_and_angular_velocity(
-            s.orientation[worlds], s.angular_momentum[worlds], m.inverse_moments[worlds],
-            m.motion, s.rotation[worlds], s.angular_velocity[worlds])
+        """R(q) and omega = I^-1 L of ``worlds`` (every world, or one world's index)."""
+        self.core.refresh(*self._range(worlds))
+
+    def _range(self, worlds) -> tuple[int, int]:
+        """(first, last) of ``worlds``: every world (slice(None)) or one world's index."""
+        return (0, self.num_worlds) if isinstance(worlds, slice) else (worlds, worlds + 1)
 
     def _body(self, body, method: str) -> int:
         n = len(self.scene)

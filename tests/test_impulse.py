@@ -3,22 +3,22 @@
 import numpy as np
 import pytest
 
-from rigid_gym.kernels.impulse import add_point_mass_matrix, contact_impulse
+from rigid_gym._core import add_point_mass_matrix, contact_impulse
 
 N = np.array([0.0, 0.0, 1.0])
 
 
 def impulse(k, v, e, mu):
-    return np.array(contact_impulse(np.asarray(k, dtype=float), *v, *N, e, mu))
+    return np.array(contact_impulse(np.asarray(k, dtype=float), v, N, e, mu))
 
 
 def test_point_mass_matrix_of_a_unit_cube_corner():
-    """K = (1/M) 1 + r*^T I^-1 r* (slide 19), built column by column by the kernel, equals the
+    """K = (1/M) 1 + r*^T I^-1 r* (slide 19), built column by column by the core, equals the
     matrix product for a unit-mass cube of edge 1 (I = M/6) at the corner r = (1/2, 1/2, -1/2)."""
     k = np.zeros((3, 3))
     inverse_moments = np.full(3, 6.0)
     r = np.array([0.5, 0.5, -0.5])
-    add_point_mass_matrix(1.0, np.eye(3), inverse_moments, *r, k)
+    k = np.array(add_point_mass_matrix(1.0, np.eye(3), inverse_moments, r, k))
     star = np.array([[0, -r[2], r[1]], [r[2], 0, -r[0]], [-r[1], r[0], 0]])
     np.testing.assert_allclose(k, np.eye(3) + star.T @ np.diag(inverse_moments) @ star, atol=1e-15)
 
@@ -57,7 +57,7 @@ def test_non_positive_sliding_denominator_leaves_the_static_impulse():
     sliding formula would pull). In the (t, n) plane that needs K_nt >= K_nn / mu, while the
     static impulse leaving the cone would need K_nt > mu K_tt; together K_nt^2 > K_tt K_nn,
     impossible for a positive definite K. So the static impulse is returned and stops the
-    contact (the kernel's guard also returns it should the sliding branch ever meet such a
+    contact (the core's guard also returns it should the sliding branch ever meet such a
     denominator)."""
     k = np.array([[1.0, 0.0, 0.5], [0.0, 1.0, 0.0], [0.5, 0.0, 1.0]])  # SPD: eigenvalues 0.5, 1, 1.5
     v = np.array([1.0, 0.0, -1.0])
@@ -80,8 +80,8 @@ def test_speeds_whose_squares_underflow_keep_the_friction_direction():
                   [8.570883641437334, -14.999999999999991, 29.897336426337187]])
     v = (8.165126103939127e-202, -1.168030658331746e-204, 1.1680306583317453e-204)
     n = (-5.350036542037848e-19, -2.4283442764624865e-19, -1.0)
-    j = np.array(contact_impulse(k, *v, *n, 0.0, 0.5))
+    j = np.array(contact_impulse(k, v, n, 0.0, 0.5))
     assert np.all(np.isfinite(j))
     # scaled up by 1e200 the same contact is ordinary: the answers must agree, scaled back
-    big = np.array(contact_impulse(k, *(1e200 * np.array(v)), *n, 0.0, 0.5))
+    big = np.array(contact_impulse(k, 1e200 * np.array(v), n, 0.0, 0.5))
     np.testing.assert_allclose(j * 1e200, big, rtol=1e-12)

@@ -1,4 +1,5 @@
-"""Mass properties (rigid_gym.inertia), the mesh kernels they use and the test meshes."""
+"""Mass properties (rigid_gym.inertia), the mesh distances they use (src/mesh_distance.h) and
+the test meshes."""
 
 import math
 
@@ -8,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import integrate
 
+from rigid_gym import _core
 from rigid_gym import quaternion as quat
 from rigid_gym.inertia import (
     MassProperties,
@@ -18,7 +20,6 @@ from rigid_gym.inertia import (
     mass_properties_monte_carlo,
     principal_axes,
 )
-from rigid_gym.kernels import mesh as mesh_kernels
 from rigid_gym.meshes import bowl_mesh, box_mesh, l_shape_mesh, prism_mesh
 from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
 
@@ -62,7 +63,7 @@ def random_orientation(rng: np.random.Generator) -> np.ndarray:
 def winding(mesh: Mesh, points) -> np.ndarray:
     p = np.ascontiguousarray(points, dtype=np.float64)
     out = np.empty(len(p))
-    mesh_kernels.winding_number(p, mesh.vertices, mesh.triangles, out)
+    _core.winding_number(p, mesh.vertices, mesh.triangles, out)
     return out
 
 
@@ -168,7 +169,7 @@ def test_combine_rejects_nothing_to_combine():
         combine([])
 
 
-# --- mesh kernels -------------------------------------------------------------------------
+# --- mesh distances (src/mesh_distance.h) -------------------------------------------------
 
 
 def test_winding_number_of_the_l_including_its_notch():
@@ -212,7 +213,7 @@ def test_signed_distance_of_the_l():
 
 def test_zero_area_triangles_are_harmless():
     """A box whose bottom edge y = -b has an extra vertex at its middle: the cap fan then holds
-    a zero-area triangle, whose distance the kernel takes from its edges (no 0/0)."""
+    a zero-area triangle, whose distance the core takes from its edges (no 0/0)."""
     a, b, c = HALF_EXTENTS
     mesh = prism_mesh([[-a, -b], [0.0, -b], [a, -b], [a, b], [-a, b]], -c, c)
     corners = mesh.vertices[mesh.triangles]  # (T, 3 corners, 3)

@@ -14,7 +14,7 @@ import rerun as rr
 from rerun.chunk import RrdReader
 
 import rigid_gym as rg
-from rigid_gym.kernels.integrate import STATIC
+from rigid_gym._core import STATIC
 from rigid_gym.cli import find_rerun
 from rigid_gym.envs.scripted import scripted_policy
 from rigid_gym.meshes import l_shape_mesh

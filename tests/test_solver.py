@@ -330,7 +330,7 @@ def test_a_struck_box_meets_its_resting_neighbour_in_the_same_step():
     """A 1 kg box at 5 m/s hits a resting one with a third 10 mm beyond it, no gravity, e = 0.
     The broad phase grows a box by its reach at the step's starting velocity, so the struck
     box's pair with the third is listed only when the step runs its impulse phases again
-    (``kernels/step.py``, MAX_RELISTS). With that pair listed the contact phase leaves no
+    (``src/step.cpp``, MAX_RELISTS). With that pair listed the contact phase leaves no
     overlap (checked by growing every box by 5 cm: 0 mm), so 0.5 mm is a bound well above
     round-off and well below the 2.5 mm of a contact found one step late (before the relist)."""
     h = 0.05
@@ -380,17 +380,17 @@ def step_with_interventions(world, steps):
         if t == 300:
             world.apply_force(cube2, (400.0, 0.0, 0.0))
         world.step(1)
-        c = world.collider
-        impulses = {(int(c.pair_a[0, k]), int(c.pair_b[0, k])): c.pair_impulse[0, k].tobytes()
-                    for k in range(c.pair_count[0])}  # by pair: sleeping moves pairs last
+        pairs, impulse = world.listed_pairs()
+        impulses = {(int(a), int(b)): j.tobytes()  # by pair: sleeping moves pairs last
+                    for (a, b), j in zip(pairs, impulse)}
         states.append([a.tobytes() for a in world.state] + [sorted(impulses.items())])
-        sleeping.append(int(world.workspace.rest.asleep.sum()))
+        sleeping.append(int(world.sleeping().sum()))
     return states, sleeping
 
 
 def test_sleeping_is_exact():
     """A body resting alone on a static or kinematic one, whose last step changed nothing,
-    is skipped (kernels/rest.py): states and pair impulses are bit-identical to stepping
+    is skipped (src/sleep.h): states and pair impulses are bit-identical to stepping
     everything, through a ball striking a resting cube, a pad landing on one and pushing it,
     a new mass and a force; and bodies did sleep (else the test would pass vacuously)."""
     scene = sleeping_scene()
@@ -415,7 +415,7 @@ def test_a_sleeping_cube_reports_its_weight_as_the_support_impulse():
     scene.add_body(rg.Box((0.05,) * 3), mass=2.0, position=(0.0, 0.0, 0.05))
     world = rg.World(scene, dt=1 / 240)
     world.step(50)
-    assert world.workspace.rest.asleep[0, 1]
-    np.testing.assert_allclose(world.collider.pair_impulse[0, 0], [0, 0, -2.0 * 9.81 / 240]
-                               if world.collider.pair_a[0, 0] == 0 else
+    assert world.sleeping()[1]
+    pairs, impulses = world.listed_pairs()
+    np.testing.assert_allclose(impulses[0], [0, 0, -2.0 * 9.81 / 240] if pairs[0, 0] == 0 else
                                [0, 0, 2.0 * 9.81 / 240], rtol=1e-12, atol=1e-15)

@@ -29,7 +29,7 @@ import numpy as np
 
 import rigid_gym as rg
 from rigid_gym import quaternion as quat
-from rigid_gym.kernels.integrate import DYNAMIC, STATIC
+from rigid_gym._core import DYNAMIC, STATIC
 
 PEER_CASES = ("free_fall", "bounce_e05", "bounce_e1", "slide", "incline_slide", "incline_stick",
               "rolling", "torque_free", "stack_drift")

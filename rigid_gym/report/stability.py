@@ -26,7 +26,7 @@ import numpy as np
 
 import rigid_gym as rg
 from rigid_gym import quaternion as quat
-from rigid_gym.kernels.integrate import DYNAMIC
+from rigid_gym._core import DYNAMIC
 from rigid_gym.report import scenes
 from rigid_gym.report.scenes import CUBE_HALF, G
 

@@ -1,0 +1,254 @@
+// Python face of the step context: rigid_gym._core.StepContext (used by rigid_gym/world.py).
+#include <nanobind/stl/array.h>
+#include <nanobind/stl/tuple.h>
+
+#include <string>
+
+#include "arrays.h"
+#include "integrate.h"
+#include "queries.h"
+#include "step.h"
+#include "thread_pool.h"
+#include "world.h"
+
+namespace rg {
+
+namespace {
+
+template <class T>
+T item(const nb::dict& d, const char* key) {
+    if (!d.contains(key)) {
+        throw nb::key_error((std::string("rigid_gym core: missing ") + key).c_str());
+    }
+    return nb::cast<T>(d[key]);
+}
+
+Geometry read_geometry(const nb::dict& g) {
+    Geometry geo;
+    auto ints = [&](const char* key) { return read_rows<int32_t>(item<InArray<int32_t>>(g, key), {}, key); };
+    auto vectors = [&](const char* key) { return read_rows<Vec3>(item<InArray<double>>(g, key), {3}, key); };
+    geo.geom_body = ints("geom_body");
+    geo.geom_type = ints("geom_type");
+    geo.geom_size = vectors("geom_size");
+    geo.geom_position = vectors("geom_position");
+    geo.geom_rotation = read_rows<Mat3>(item<InArray<double>>(g, "geom_rotation"), {3, 3}, "geom_rotation");
+    geo.geom_grid = ints("geom_grid");
+    geo.body_geom_start = ints("body_geom_start");
+    geo.sample_start = ints("sample_start");
+    geo.sample_vertex_count = ints("sample_vertex_count");
+    geo.sample_points = vectors("sample_points");
+    geo.body_bound_center = vectors("body_bound_center");
+    geo.body_bound_half = vectors("body_bound_half");
+    geo.body_unbounded = ints("body_unbounded");
+    geo.grid_offset = ints("grid_offset");
+    geo.grid_shape = read_rows<Index3>(item<InArray<int32_t>>(g, "grid_shape"), {3}, "grid_shape");
+    geo.grid_origin = vectors("grid_origin");
+    geo.grid_spacing = read_rows<double>(item<InArray<double>>(g, "grid_spacing"), {}, "grid_spacing");
+    geo.grid_values = read_rows<double>(item<InArray<double>>(g, "grid_values"), {}, "grid_values");
+    geo.mesh_triangle_start = ints("mesh_triangle_start");
+    geo.mesh_triangles = read_rows<Index3>(item<InArray<int32_t>>(g, "mesh_triangles"), {3}, "mesh_triangles");
+    geo.mesh_vertices = vectors("mesh_vertices");
+    return geo;
+}
+
+Settings read_settings(const nb::dict& s) {
+    Settings out;
+    out.collision_passes = item<int>(s, "collision_passes");
+    out.contact_passes = item<int>(s, "contact_passes");
+    out.shock_sweeps = item<int>(s, "shock_sweeps");
+    out.rotation_order = item<int>(s, "rotation_order");
+    out.sweep = item<bool>(s, "sweep");
+    out.broad_phase = item<bool>(s, "broad_phase");
+    out.sleep = item<bool>(s, "sleep");
+    out.gravity = item<double>(s, "gravity");
+    const auto up = item<std::array<double, 3>>(s, "up");
+    out.up = {up[0], up[1], up[2]};
+    return out;
+}
+
+// Worlds [first, last) checked against the batch.
+void check_worlds(const StepContext& c, int first, int last, const char* method) {
+    if (first < 0 || last > c.num_worlds() || first > last) {
+        throw nb::index_error((std::string("StepContext.") + method + ": worlds [" +
+                               std::to_string(first) + ", " + std::to_string(last) +
+                               ") outside [0, " + std::to_string(c.num_worlds()) + ")")
+                                  .c_str());
+    }
+}
+
+using Context = nb::class_<StepContext>;
+
+// A read-write numpy view (B, n, ...) of one of the context's batched buffers.
+template <class S, class T>
+void def_view(Context& cls, const char* name, Array<T> StepContext::*field,
+              std::initializer_list<size_t> row_shape) {
+    std::vector<size_t> tail(row_shape);
+    cls.def_prop_ro(name, [field, tail](nb::handle self) {
+        StepContext& c = nb::cast<StepContext&>(self);
+        Array<T>& a = c.*field;
+        const size_t b = c.num_worlds(), n = c.num_bodies();
+        if (tail.empty()) {
+            return view<S>(self, a.data(), {b, n});
+        }
+        if (tail.size() == 1) {
+            return view<S>(self, a.data(), {b, n, tail[0]});
+        }
+        return view<S>(self, a.data(), {b, n, tail[0], tail[1]});
+    }, nb::rv_policy::reference);
+}
+
+}  // namespace
+
+void bind_world(nb::module_& m) {
+    Context cls(m, "StepContext",
+                "Every buffer the step reads and writes for a batch of worlds of one scene "
+                "(src/world.h). rigid_gym.World owns one; its state arrays are views of it.");
+    cls.def(
+        "__init__",
+        [](StepContext* self, int num_worlds, nb::dict geometry, InArray<int32_t> motion,
+           std::array<double, 3> gravity, nb::dict settings, int64_t pair_contacts) {
+            if (num_worlds < 1) {
+                throw nb::value_error("StepContext: num_worlds must be >= 1");
+            }
+            Geometry geo = read_geometry(geometry);
+            const Array<int32_t> kinds = read_rows<int32_t>(motion, {}, "motion");
+            if (kinds.size() != geo.num_bodies() || kinds.size() + 1 != geo.body_geom_start.size()) {
+                throw nb::value_error("StepContext: motion and geometry disagree on the bodies");
+            }
+            std::vector<int32_t> classes(kinds.data(), kinds.data() + kinds.size());
+            new (self) StepContext(num_worlds, std::move(geo), std::move(classes),
+                                   {gravity[0], gravity[1], gravity[2]}, read_settings(settings),
+                                   pair_contacts);
+        },
+        nb::arg("num_worlds"), nb::arg("geometry"), nb::arg("motion"), nb::arg("gravity"),
+        nb::arg("settings"), nb::arg("pair_contacts"));
+    def_view<double>(cls, "position", &StepContext::position, {3});
+    def_view<double>(cls, "orientation", &StepContext::orientation, {4});
+    def_view<double>(cls, "velocity", &StepContext::velocity, {3});
+    def_view<double>(cls, "angular_momentum", &StepContext::angular_momentum, {3});
+    def_view<double>(cls, "angular_velocity", &StepContext::angular_velocity, {3});
+    def_view<double>(cls, "rotation", &StepContext::rotation, {3, 3});
+    def_view<double>(cls, "force", &StepContext::force, {3});
+    def_view<double>(cls, "torque", &StepContext::torque, {3});
+    def_view<double>(cls, "inverse_mass", &StepContext::inverse_mass, {});
+    def_view<double>(cls, "inverse_moments", &StepContext::inverse_moments, {3});
+    def_view<double>(cls, "friction", &StepContext::friction, {});
+    def_view<double>(cls, "restitution", &StepContext::restitution, {});
+    def_view<int32_t>(cls, "attach_parent", &StepContext::attach_parent, {});
+    def_view<double>(cls, "attach_offset_position", &StepContext::attach_offset_position, {3});
+    def_view<double>(cls, "attach_offset_orientation", &StepContext::attach_offset_orientation, {4});
+    cls.def(
+        "step",
+        [](StepContext& c, int64_t steps, int phases, double dt) {
+            if (steps < 0 || phases <= 0 || phases > EVERY_PHASE || !(dt > 0.0)) {
+                throw nb::value_error("StepContext.step: steps >= 0, phases in [1, 63], dt > 0");
+            }
+            nb::gil_scoped_release unlocked;
+            advance(c, steps, phases, dt);
+        },
+        nb::arg("steps"), nb::arg("phases") = static_cast<int>(EVERY_PHASE), nb::arg("dt"),
+        "Advance every world by `steps` steps of dt (s), running the phases whose bits are set "
+        "(src/step.h); the GIL is released meanwhile.");
+    cls.def(
+        "refresh",
+        [](StepContext& c, int first, int last) {
+            check_worlds(c, first, last, "refresh");
+            for (int w = first; w < last; ++w) {
+                const WorldStep s = c.world(w);
+                refresh_rotation_and_angular_velocity(s.bodies, s.model);
+            }
+        },
+        "R(q) and omega = I^-1 L of worlds [first, last), after q or L were set.");
+    cls.def(
+        "place_attached",
+        [](StepContext& c, int first, int last) {
+            check_worlds(c, first, last, "place_attached");
+            for (int w = first; w < last; ++w) {
+                const WorldStep s = c.world(w);
+                place_attached(s.bodies, s.attached);
+            }
+        },
+        "Put every attached body of worlds [first, last) at its offset from its parent.");
+    cls.def(
+        "forget",
+        [](StepContext& c, int first, int last) {
+            check_worlds(c, first, last, "forget");
+            c.forget(first, last);
+        },
+        "No body of worlds [first, last) sleeps in their next step.");
+    cls.def(
+        "pairs",
+        [](StepContext& c, int w) {
+            check_worlds(c, w, w + 1, "pairs");
+            const int64_t count = std::min(c.pair_count[w], c.pair_capacity());
+            const int64_t base = static_cast<int64_t>(w) * c.pair_capacity();
+            std::vector<int32_t> a(count), b(count);
+            std::vector<double> impulse(3 * count);
+            for (int64_t k = 0; k < count; ++k) {
+                a[k] = c.pair_a[base + k];
+                b[k] = c.pair_b[base + k];
+                const Vec3 j = c.pair_impulse[base + k];
+                impulse[3 * k] = j.x;
+                impulse[3 * k + 1] = j.y;
+                impulse[3 * k + 2] = j.z;
+            }
+            const size_t rows = count;
+            return std::make_tuple(hand_over(std::move(a), {rows}), hand_over(std::move(b), {rows}),
+                                   hand_over(std::move(impulse), {rows, 3}));
+        },
+        "World w's pairs listed by the last step (body_a (k,), body_b (k,)) and the impulse "
+        "each transmitted to its body a in it ((k, 3), N s); copies.");
+    cls.def_prop_ro(
+        "pair_counts",
+        [](StepContext& c) {
+            std::vector<int64_t> counts(c.pair_count.data(), c.pair_count.data() + c.num_worlds());
+            return hand_over(std::move(counts), {static_cast<size_t>(c.num_worlds())});
+        },
+        nb::rv_policy::reference,
+        "(B,) pairs the last step listed in each world; a copy.");
+    cls.def_prop_ro(
+        "asleep",
+        [](StepContext& c) {
+            std::vector<uint8_t> flags(c.asleep.data(), c.asleep.data() + c.asleep.size());
+            return hand_over(std::move(flags), {static_cast<size_t>(c.num_worlds()),
+                                                static_cast<size_t>(c.num_bodies())});
+        },
+        nb::rv_policy::reference,
+        "(B, n) which bodies slept through the last step (1) or not (0); a copy.");
+    cls.def(
+        "candidate_pairs",
+        [](StepContext& c, double margin, int w) {
+            check_worlds(c, w, w + 1, "candidate_pairs");
+            std::vector<int32_t> pairs = candidate_pairs(c, margin, w);
+            const size_t k = pairs.size() / 2;
+            return hand_over(std::move(pairs), {k, 2});
+        },
+        "World w's broad-phase pairs at its current poses, boxes grown by margin (m): (k, 2) "
+        "body indices (src/queries.h).");
+    cls.def(
+        "contacts",
+        [](StepContext& c, double margin, int first, int last) {
+            check_worlds(c, first, last, "contacts");
+            ContactRows rows;
+            {
+                nb::gil_scoped_release unlocked;
+                rows = detect_contacts(c, margin, first, last);
+            }
+            const size_t k = rows.depth.size();
+            return std::make_tuple(hand_over(std::move(rows.world), {k}),
+                                   hand_over(std::move(rows.body_a), {k}),
+                                   hand_over(std::move(rows.body_b), {k}),
+                                   hand_over(std::move(rows.point), {k, 3}),
+                                   hand_over(std::move(rows.normal), {k, 3}),
+                                   hand_over(std::move(rows.depth), {k}));
+        },
+        "Contacts at the current poses of worlds [first, last) (src/queries.h): world, body_a, "
+        "body_b (k,), point, normal (k, 3), depth (k,).");
+    m.def("num_threads", [] { return ThreadPool::instance().size(); },
+          "Threads a batch of worlds is shared out over, the calling thread included.");
+    m.def("set_num_threads", [](int threads) { ThreadPool::set_size(threads); },
+          "Share batches out over this many threads (0: the cores this process may use, at "
+          "most RIGID_GYM_NUM_THREADS). Not while a batch steps.");
+}
+
+}  // namespace rg

@@ -1,0 +1,120 @@
+// Velocity and position updates, rotation, attachments (integrate.h).
+#include "integrate.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace rg {
+
+namespace {
+
+constexpr double QUARTER_TURN = 0.5 * 3.14159265358979323846;
+
+// omega_bar for one (sub)step of length h (s): Buss's update of the given order (1, 2 or 3),
+// from R at the start of the step, angular momentum L and torque tau.
+Vec3 effective_angular_velocity(const Mat3& r, Vec3 inverse_moments, Vec3 l, Vec3 tau, double h,
+                                int order) {
+    const Vec3 o = apply_inverse_inertia(r, inverse_moments, l);
+    if (order == 1) {
+        return o;
+    }
+    // alpha = d omega/dt = I^-1 (L x omega + tau)
+    const Vec3 m = add(cross(l, o), tau);
+    const Vec3 a = apply_inverse_inertia(r, inverse_moments, m);
+    const Vec3 b = {o.x + 0.5 * h * a.x, o.y + 0.5 * h * a.y, o.z + 0.5 * h * a.z};
+    if (order == 2) {
+        return b;
+    }
+    // omega'' = omega x alpha - I^-1 (omega x M) + I^-1 (tau x omega + L x alpha), M = L x omega + tau
+    const Vec3 p1 = cross(o, a);
+    const Vec3 wm = cross(o, m);
+    const Vec3 tw = cross(tau, o);
+    const Vec3 la = cross(l, a);
+    const Vec3 s = {tw.x + la.x - wm.x, tw.y + la.y - wm.y, tw.z + la.z - wm.z};
+    const Vec3 p2 = apply_inverse_inertia(r, inverse_moments, s);
+    const Vec3 dd = add(p1, p2);
+    // the Magnus commutator term alpha x omega
+    const Vec3 c = cross(a, o);
+    const double c6 = h * h / 6.0;
+    const double c12 = h * h / 12.0;
+    return {b.x + c6 * dd.x + c12 * c.x, b.y + c6 * dd.y + c12 * c.y, b.z + c6 * dd.z + c12 * c.z};
+}
+
+}  // namespace
+
+void refresh_rotation_and_angular_velocity(const BodyStates& bodies, const BodyModel& model) {
+    for (int64_t i = 0; i < bodies.position.size; ++i) {
+        bodies.rotation[i] = rotation_from_quaternion(bodies.orientation[i]);
+        if (model.motion[i] == DYNAMIC) {
+            bodies.angular_velocity[i] = apply_inverse_inertia(
+                bodies.rotation[i], model.inverse_moments[i], bodies.angular_momentum[i]);
+        }
+    }
+}
+
+void update_velocities(const BodyStates& bodies, const BodyModel& model, double dt) {
+    const Vec3 g = model.gravity;
+    for (int64_t i = 0; i < bodies.position.size; ++i) {
+        if (model.motion[i] != DYNAMIC) {
+            continue;
+        }
+        const Vec3 f = bodies.force[i], tau = bodies.torque[i];
+        const double inverse_mass = model.inverse_mass[i];
+        Vec3& v = bodies.velocity[i];
+        Vec3& l = bodies.angular_momentum[i];
+        v = {v.x + dt * (g.x + f.x * inverse_mass), v.y + dt * (g.y + f.y * inverse_mass),
+             v.z + dt * (g.z + f.z * inverse_mass)};
+        l = {l.x + dt * tau.x, l.y + dt * tau.y, l.z + dt * tau.z};
+        bodies.angular_velocity[i] =
+            apply_inverse_inertia(bodies.rotation[i], model.inverse_moments[i], l);
+    }
+}
+
+void update_positions(const BodyStates& bodies, const BodyModel& model, double dt, int order) {
+    for (int64_t i = 0; i < bodies.position.size; ++i) {
+        if (model.motion[i] == STATIC) {
+            continue;
+        }
+        Vec3& x = bodies.position[i];
+        const Vec3 v = bodies.velocity[i];
+        x = {x.x + dt * v.x, x.y + dt * v.y, x.z + dt * v.z};
+        Quat& q = bodies.orientation[i];
+        Mat3& r = bodies.rotation[i];
+        const Vec3 w = bodies.angular_velocity[i];
+        if (model.motion[i] == KINEMATIC) {
+            q = rotate_by_angular_velocity(q, w, dt);
+            r = rotation_from_quaternion(q);
+            continue;
+        }
+        const Vec3 l = bodies.angular_momentum[i], tau = bodies.torque[i];
+        const Vec3 inverse_moments = model.inverse_moments[i];
+        const double speed = std::sqrt(w.x * w.x + w.y * w.y + w.z * w.z);
+        const int substeps = std::max(1, static_cast<int>(std::ceil(speed * dt / QUARTER_TURN)));
+        const double h = dt / substeps;
+        for (int k = 0; k < substeps; ++k) {
+            const Vec3 bar = effective_angular_velocity(r, inverse_moments, l, tau, h, order);
+            q = rotate_by_angular_velocity(q, bar, h);
+            r = rotation_from_quaternion(q);
+        }
+        bodies.angular_velocity[i] = apply_inverse_inertia(r, inverse_moments, l);
+    }
+}
+
+void place_attached(const BodyStates& bodies, const Attachments& attached) {
+    for (int64_t i = 0; i < bodies.position.size; ++i) {
+        const int p = attached.parent[i];
+        if (p < 0) {
+            continue;
+        }
+        bodies.position[i] = to_world(bodies.position[p], bodies.rotation[p],
+                                      attached.offset_position[i]);
+        bodies.velocity[i] = bodies.velocity[p];
+        bodies.angular_velocity[i] = {0.0, 0.0, 0.0};
+        bodies.angular_momentum[i] = {0.0, 0.0, 0.0};
+        bodies.orientation[i] =
+            normalize(multiply(bodies.orientation[p], attached.offset_orientation[i]));
+        bodies.rotation[i] = rotation_from_quaternion(bodies.orientation[i]);
+    }
+}
+
+}  // namespace rg

@@ -1,0 +1,152 @@
+// Tarjan's components, the levels of the condensed graph, and counting sorts (levels.h).
+#include "levels.h"
+
+#include <algorithm>
+
+namespace rg {
+
+namespace {
+
+// Tarjan's algorithm without recursion over the graph whose node v has the successors
+// graph.targets[edge_start[v] : edge_start[v + 1]]. Writes graph.component and returns the
+// count. Components come out in reverse topological order: an edge between components
+// always goes from a higher number to a lower one.
+int64_t strongly_connected_components(const Graph& graph, int64_t n) {
+    for (int64_t v = 0; v < n; ++v) {
+        graph.index[v] = -1;
+        graph.low[v] = 0;
+        graph.on_stack[v] = 0;
+    }
+    int64_t counter = 0, count = 0, top = 0;
+    for (int64_t root = 0; root < n; ++root) {
+        if (graph.index[root] >= 0) {
+            continue;
+        }
+        int64_t depth = 0;
+        int64_t v = root;
+        while (true) {
+            if (graph.index[v] < 0) {  // first visit
+                graph.index[v] = graph.low[v] = counter++;
+                graph.stack[top++] = v;
+                graph.on_stack[v] = 1;
+                graph.next_edge[v] = graph.edge_start[v];
+                graph.calls[depth++] = v;
+            }
+            v = graph.calls[depth - 1];
+            if (graph.next_edge[v] < graph.edge_start[v + 1]) {
+                const int64_t u = graph.targets[graph.next_edge[v]++];
+                if (graph.index[u] < 0) {
+                    v = u;
+                    continue;
+                }
+                if (graph.on_stack[u]) {
+                    graph.low[v] = std::min(graph.low[v], graph.index[u]);
+                }
+                continue;
+            }
+            if (graph.low[v] == graph.index[v]) {
+                while (true) {
+                    const int64_t x = graph.stack[--top];
+                    graph.on_stack[x] = 0;
+                    graph.component[x] = count;
+                    if (x == v) {
+                        break;
+                    }
+                }
+                count += 1;
+            }
+            depth -= 1;
+            if (depth == 0) {
+                break;
+            }
+            const int64_t parent = graph.calls[depth - 1];
+            graph.low[parent] = std::min(graph.low[parent], graph.low[v]);
+            v = parent;
+        }
+    }
+    return count;
+}
+
+}  // namespace
+
+void counting_sort(Span<const int64_t> keys, int64_t n, int64_t num_keys, Span<int64_t> counts,
+                   Span<int64_t> out) {
+    for (int64_t k = 0; k < num_keys + 1; ++k) {
+        counts[k] = 0;
+    }
+    for (int64_t v = 0; v < n; ++v) {
+        counts[keys[v] + 1] += 1;
+    }
+    for (int64_t k = 0; k < num_keys; ++k) {
+        counts[k + 1] += counts[k];
+    }
+    for (int64_t v = 0; v < n; ++v) {
+        out[counts[keys[v]]++] = v;
+    }
+}
+
+void contact_levels(const Graph& graph, Span<const int32_t> motion, int64_t num_edges) {
+    const int64_t n = motion.size;
+    // CSR form of the edges, each node's successors in edge order
+    for (int64_t v = 0; v < n + 1; ++v) {
+        graph.edge_start[v] = 0;
+    }
+    for (int64_t k = 0; k < num_edges; ++k) {
+        graph.edge_start[graph.edge_from[k] + 1] += 1;
+    }
+    for (int64_t v = 0; v < n; ++v) {
+        graph.edge_start[v + 1] += graph.edge_start[v];
+        graph.counts[v] = graph.edge_start[v];
+    }
+    for (int64_t k = 0; k < num_edges; ++k) {
+        graph.targets[graph.counts[graph.edge_from[k]]++] = graph.edge_to[k];
+    }
+    const int64_t count = strongly_connected_components(graph, n);
+    for (int64_t c = 0; c < count; ++c) {
+        graph.component_level[c] = 1;
+    }
+    // topological order: components from the highest number down
+    for (int64_t v = 0; v < n; ++v) {
+        graph.level[v] = count - 1 - graph.component[v];  // used as the sort key
+    }
+    counting_sort({graph.level.data, graph.level.size}, n, count, graph.counts, graph.by_component);
+    for (int64_t m = 0; m < n; ++m) {
+        const int64_t v = graph.by_component[m];
+        const int64_t c = graph.component[v];
+        for (int64_t k = graph.edge_start[v]; k < graph.edge_start[v + 1]; ++k) {
+            const int64_t u = graph.targets[k];
+            if (graph.component[u] != c) {
+                graph.component_level[graph.component[u]] =
+                    std::max(graph.component_level[graph.component[u]], graph.component_level[c] + 1);
+            }
+        }
+    }
+    for (int64_t v = 0; v < n; ++v) {
+        graph.level[v] = motion[v] == DYNAMIC ? graph.component_level[graph.component[v]] : 0;
+    }
+}
+
+void pairs_by_body(const Graph& graph, const PairLists& lists, int64_t pairs, int num_bodies) {
+    const Span<int64_t> start = graph.body_pair_start, fill = graph.counts;
+    for (int64_t v = 0; v < num_bodies + 1; ++v) {
+        start[v] = 0;
+    }
+    for (int64_t k = 0; k < pairs; ++k) {
+        if (graph.touching[k]) {
+            start[lists.pair_a[k] + 1] += 1;
+            start[lists.pair_b[k] + 1] += 1;
+        }
+    }
+    for (int64_t v = 0; v < num_bodies; ++v) {
+        start[v + 1] += start[v];
+        fill[v] = start[v];
+    }
+    for (int64_t k = 0; k < pairs; ++k) {
+        if (graph.touching[k]) {
+            graph.body_pairs[fill[lists.pair_a[k]]++] = k;
+            graph.body_pairs[fill[lists.pair_b[k]]++] = k;
+        }
+    }
+}
+
+}  // namespace rg

@@ -1,0 +1,26 @@
+// The contact graph's levels for shock propagation: bodies ordered from the ground up.
+//
+// An edge goes from each supporting body to the body it supports (shock.cpp decides which is
+// which from the contact normal against gravity; side contacts get both). Cycles (bodies
+// supporting each other side by side) are collapsed into one node by Tarjan's strongly
+// connected components; the condensed graph is a DAG, and each body's level is 1 + the
+// highest level among its supports (static and kinematic bodies: level 0).
+#pragma once
+
+#include "world.h"
+
+namespace rg {
+
+// graph.level for every body, from the edges graph.edge_from/edge_to[:num_edges].
+void contact_levels(const Graph& graph, Span<const int32_t> motion, int64_t num_edges);
+
+// CSR adjacency of the touching pairs: body v's pairs are
+// graph.body_pairs[body_pair_start[v] : body_pair_start[v + 1]], in pair order.
+void pairs_by_body(const Graph& graph, const PairLists& lists, int64_t pairs, int num_bodies);
+
+// out[:n] = the indices 0..n-1 ordered by keys[:n] (ints in [0, num_keys)), ties by index
+// (a stable sort); counts: (>= num_keys + 1,) scratch.
+void counting_sort(Span<const int64_t> keys, int64_t n, int64_t num_keys, Span<int64_t> counts,
+                   Span<int64_t> out);
+
+}  // namespace rg

@@ -1,0 +1,75 @@
+// Resting contact over a patch: one impulse and one angular impulse for a face or an edge.
+//
+// A box standing on an incline needs friction at its base *and* a shift of pressure downhill
+// to balance the moment that friction makes about its centre of mass. Point impulses, or one
+// impulse at a fixed point, can only reach that balance over many passes and leave the box
+// rocking. Here a patch (contacts of one pair with a common normal, see solver.cpp) gets the
+// wrench (j, m) at its centroid c that does it in one go:
+//
+//     unknowns   j (3) and m along the patch's constrained rotations D:
+//                a face: tip about t1, t2 and spin about n; an edge (collinear points) with
+//                direction e: tip about n x e and spin about n; a single point: none
+//     targets    relative velocity at c: -v - e v_n n (the notes' static impulse, slide 21),
+//                relative angular velocity along D: tip -(1 + e) Omega.d, spin -Omega.n
+//     matrix     [dv; dOmega] = A [j; m],  A = sum over movable bodies of
+//                [[1/M + r*^T W r*, r*^T W], [W r*, W]],  W = I(t)^-1, r = c - X
+//
+// It is accepted only if physically admissible: j.n > 0; and, for the patch's total over the
+// step so far (the impulse F its pairs already transmitted plus j, the earlier part taken as
+// acting at c): |F_t| <= mu F_n (Coulomb cone), |m.n| <= mu F_n rho (torsional friction; rho:
+// the points' mean distance from c), and the centre of pressure c + n x m_t / F_n lies within
+// the patch. If friction cannot hold, the sliding wrench is tried: j = j_n (n - mu T)
+// (slides 22-23) with only the tip constraints, and torsional friction applied afterwards
+// within its limit. If the centre of pressure would leave the patch the body is tipping over
+// an edge, and the caller falls back to a single impulse.
+#pragma once
+
+#include "contact_set.h"
+
+namespace rg {
+
+// m/s: contacts approaching slower than this are at rest and get no impulse. An exact resolve
+// leaves round-off (about 1e-17 m/s) behind; without a floor every later pass would apply a
+// round-off impulse and count as work done, so the passes never stopped early (a cube resting
+// on the table used all 10 contact passes). Gravity alone brings 0.04 m/s per step of 1/240 s,
+// so nothing below the floor can build up; 1e-9 m/s is 1 nm of drift in 1 s.
+constexpr double REST_SPEED = 1e-9;
+
+enum PatchOutcome { APPLIED, SEPARATING, UNRESOLVED };
+
+struct PatchResult {
+    PatchOutcome outcome;
+    Vec3 impulse;  // the linear impulse applied to a, N s
+};
+
+// Which bodies of a pair take impulses: false treats one as infinite mass (kinematic, static,
+// or frozen by shock propagation).
+struct Movable {
+    bool a, b;
+};
+
+// Apply the patch wrench of the header to the pair (a, b) for the patch whose contacts have
+// group == seed. prior: the impulse the patch's pairs already transmitted to a this step
+// (N s); the static wrench must keep prior + j inside the friction cone. Outcomes: APPLIED;
+// SEPARATING when holding the patch would need a pulling impulse (j_n <= 0), or when it is at
+// rest (its points' relative speeds below REST_SPEED): nothing to do; or UNRESOLVED (nothing
+// applied) for a single point or a body tipping over an edge, which the caller treats with a
+// single impulse.
+PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int a, int b,
+                          Movable movable, const ContactSet& set, int64_t seed, int64_t count,
+                          double e, double mu, Vec3 prior);
+
+// (V_a + w_a x r_a) - (V_b + w_b x r_b).
+Vec3 relative_point_velocity(const BodyStates& bodies, int a, int b, Vec3 ra, Vec3 rb);
+
+// The wrench (j at lever r, plus angular impulse m) on a and its opposite on b (movable
+// bodies only): V += j/M, L += r x j + m, omega = I(t)^-1 L.
+void apply_pair(const BodyStates& bodies, const BodyModel& model, int a, int b, Movable movable,
+                Vec3 j, Vec3 m, Vec3 ra, Vec3 rb);
+
+// Angular impulse t n on a (and -t n on b) that stops their relative spin about n,
+// |t| <= limit (N m s): torsional friction of a patch.
+void spin_friction(const BodyStates& bodies, const BodyModel& model, int a, int b,
+                   Movable movable, Vec3 n, double limit);
+
+}  // namespace rg

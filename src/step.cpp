@@ -1,0 +1,190 @@
+// The step's stages in order (step.h).
+#include "step.h"
+
+#include <algorithm>
+#include <vector>
+
+#include "integrate.h"
+#include "sleep.h"
+#include "solver.h"
+#include "thread_pool.h"
+
+namespace rg {
+
+namespace {
+
+// Times a step's impulse stages may run again with the pairs of the bodies' grown reach.
+constexpr int MAX_RELISTS = 4;
+
+// The world's pairs for its current poses and velocities, boxes grown by at least the
+// reach recorded so far; returns how many. acceleration: m/s^2 the bodies may gain (gravity).
+int64_t list_pairs(WorldStep& w, double dt, double acceleration) {
+    return find_world_pairs(*w.geo, w.model.motion, w.bodies, 0.0, dt, acceleration,
+                            w.settings->sweep, w.lists);
+}
+
+// Copy every body's velocity, angular momentum and angular velocity into w.start (keep), or
+// back from it (one body, or all with body = -1).
+void keep_velocities(WorldStep& w, bool keep, int body = -1) {
+    const int64_t n = w.num_bodies();
+    const BodyStates& s = w.bodies;
+    for (int64_t i = body < 0 ? 0 : body; i < (body < 0 ? n : body + 1); ++i) {
+        if (keep) {
+            w.start[i] = s.velocity[i];
+            w.start[n + i] = s.angular_momentum[i];
+            w.start[2 * n + i] = s.angular_velocity[i];
+        } else {
+            s.velocity[i] = w.start[i];
+            s.angular_momentum[i] = w.start[n + i];
+            s.angular_velocity[i] = w.start[2 * n + i];
+        }
+    }
+}
+
+// True when some body, at its current velocity, moves further in dt than its box was grown.
+// Called before the position update, which moves a body by its current velocities: no
+// acceleration term (the broad phase's bounds the velocity update's gravity).
+bool outgrown(const WorldStep& w, double dt) {
+    for (int i = 0; i < w.num_bodies(); ++i) {
+        if (w.geo->body_unbounded[i] == 0 &&
+            swept_margin(*w.geo, i, w.bodies.velocity[i], w.bodies.angular_velocity[i], 0.0, dt,
+                         0.0) > w.lists.reach[i]) {
+            return true;
+        }
+    }
+    return false;
+}
+
+void clear_impulses(WorldStep& w, int64_t count) {
+    for (int64_t k = 0; k < count; ++k) {
+        w.pair_impulse[k] = {0.0, 0.0, 0.0};  // Coulomb's limit applies to the step's total
+    }
+}
+
+// The collision, velocity update, contact and shock stages (those whose bits are set) over
+// the first `count` listed pairs (the awake ones, with sleeping).
+void impulse_stages(WorldStep& w, int phases, double dt, int64_t count) {
+    const Settings& c = *w.settings;
+    if ((phases & COLLISION_PHASE) && c.collision_passes > 0 && count > 0) {
+        resolve_world_contacts(w, count, dt, COLLISION, c.collision_passes);
+    }
+    if (phases & VELOCITY_PHASE) {
+        update_velocities(w.bodies, w.model, dt);
+    }
+    if ((phases & CONTACT_PHASE) && c.contact_passes > 0 && count > 0) {
+        resolve_world_contacts(w, count, dt, CONTACT, c.contact_passes);
+    }
+    if ((phases & SHOCK_PHASE) && c.shock_sweeps > 0 && c.gravity > 0.0 && count > 0) {
+        propagate_world_shock(w, count, dt);
+    }
+}
+
+}  // namespace
+
+// The broad phase lists the pairs that can touch if every body keeps its speed through the
+// step (swept_margin), but the impulse stages may speed a body up: a resting box struck by
+// another. Before the position update, a body whose new velocity reaches past its box grows
+// its box; if that lists more pairs, the velocities are put back as they were when the
+// impulse stages began and the stages run again with every pair (up to MAX_RELISTS times),
+// so a body is not moved into a neighbour whose pair was never listed. Nothing sleeps then.
+int64_t step_world(WorldStep& w, int64_t steps, int phases, double dt) {
+    const Settings& c = *w.settings;
+    const int64_t capacity = w.pair_capacity();
+    for (int64_t done = 0; done < steps; ++done) {
+        // 0. broad phase: every pair whose boxes may meet within this step (velocities
+        //    included); held bodies are put at their place first
+        if (phases & BROAD_PHASE) {
+            place_attached(w.bodies, w.attached);
+            for (int i = 0; i < w.num_bodies(); ++i) {
+                w.lists.reach[i] = 0.0;
+            }
+            const int64_t count = c.broad_phase ? list_pairs(w, dt, c.gravity) : 0;
+            *w.pair_count = count;
+            if (count > capacity) {
+                return done;
+            }
+            clear_impulses(w, count);
+            keep_velocities(w, true);
+            *w.rest.awake_pairs = count;
+            if (c.sleep) {
+                mark_asleep(w, count);
+            }
+        }
+        // 1-4. collision, velocity update, contact, shock propagation
+        impulse_stages(w, phases, dt, *w.rest.awake_pairs);
+        // 5. position update with the final velocities
+        if (phases & POSITION_PHASE) {
+            if (c.sleep) {  // the velocity update gave the asleep bodies gravity's share
+                for (int i = 0; i < w.num_bodies(); ++i) {
+                    if (w.rest.asleep[i]) {
+                        keep_velocities(w, false, i);
+                    }
+                }
+            }
+            if (c.broad_phase) {
+                for (int relist = 0; relist < MAX_RELISTS && outgrown(w, dt); ++relist) {
+                    const int64_t count = *w.pair_count;
+                    const int64_t more = list_pairs(w, dt, 0.0);  // the final velocities
+                    if (more == count) {  // boxes only grow: the same count is the same pairs
+                        if (c.sleep) {    // in the order the impulses were recorded in
+                            move_asleep_last(w, count);
+                        }
+                        break;
+                    }
+                    *w.pair_count = more;
+                    keep_velocities(w, false);
+                    wake_world(w, more);
+                    if (more > capacity) {
+                        return done;
+                    }
+                    clear_impulses(w, more);
+                    impulse_stages(w, IMPULSE_PHASES, dt, more);
+                }
+            }
+            if (c.sleep) {
+                keep_rest_impulses(w);
+            }
+            update_positions(w.bodies, w.model, dt, c.rotation_order);
+            for (int i = 0; i < w.num_bodies(); ++i) {
+                w.bodies.force[i] = {0.0, 0.0, 0.0};
+                w.bodies.torque[i] = {0.0, 0.0, 0.0};
+            }
+        }
+    }
+    if (phases & POSITION_PHASE) {
+        place_attached(w.bodies, w.attached);
+    }
+    return steps;
+}
+
+void advance(StepContext& context, int64_t steps, int phases, double dt) {
+    const int num_worlds = context.num_worlds();
+    std::vector<int64_t> done(num_worlds, 0);
+    ThreadPool& pool = ThreadPool::instance();
+    while (true) {
+        const int ranges = std::min(num_worlds, pool.size());
+        pool.run(ranges, [&](int range) {
+            const int first = static_cast<int>(static_cast<int64_t>(num_worlds) * range / ranges);
+            const int last = static_cast<int>(static_cast<int64_t>(num_worlds) * (range + 1) / ranges);
+            for (int w = first; w < last; ++w) {
+                if (done[w] < steps) {
+                    WorldStep rows = context.world(w);
+                    done[w] += step_world(rows, steps - done[w], phases, dt);
+                }
+            }
+        });
+        if (std::all_of(done.begin(), done.end(), [&](int64_t d) { return d == steps; })) {
+            return;
+        }
+        int64_t needed = 0;
+        for (int w = 0; w < num_worlds; ++w) {
+            needed = std::max(needed, context.pair_count[w]);
+        }
+        context.grow_pairs(needed);
+        if (!(phases & BROAD_PHASE)) {  // a position phase whose relist outgrew the buffers:
+            phases = EVERY_PHASE;      // the step was put back to its start; it runs again whole
+        }
+    }
+}
+
+}  // namespace rg

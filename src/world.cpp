@@ -1,0 +1,194 @@
+// Allocation of the step context and its per-world rows (world.h).
+#include "world.h"
+
+#include <algorithm>
+#include <utility>
+
+#include "sleep.h"
+
+namespace rg {
+
+namespace {
+
+// Rows [w count, (w + 1) count) of a batched buffer.
+template <class T>
+Span<T> world_rows(Array<T>& a, int w, int64_t count) {
+    return a.rows(w * count, count);
+}
+
+// A batched buffer's rows copied into a buffer of another row count per world.
+template <class T>
+void resize_rows(Array<T>& a, int num_worlds, int64_t old_count, int64_t new_count) {
+    Array<T> grown(num_worlds * new_count, T());
+    const int64_t kept = std::min(old_count, new_count);
+    for (int w = 0; w < num_worlds; ++w) {
+        for (int64_t k = 0; k < kept; ++k) {
+            grown[w * new_count + k] = a[w * old_count + k];
+        }
+    }
+    a = std::move(grown);
+}
+
+}  // namespace
+
+void ContactSetBuffers::allocate(int num_worlds, int64_t num_bodies, int64_t num_contacts) {
+    bodies = num_bodies;
+    contacts = num_contacts;
+    position.assign(num_worlds * num_bodies, {});
+    orientation.assign(num_worlds * num_bodies, {});
+    rotation.assign(num_worlds * num_bodies, {});
+    point.assign(num_worlds * num_contacts, {});
+    normal.assign(num_worlds * num_contacts, {});
+    depth.assign(num_worlds * num_contacts, 0.0);
+    orient.assign(num_worlds * num_contacts, 0.0);
+    group.assign(num_worlds * num_contacts, 0);
+    partner.assign(num_worlds * num_contacts, 0);
+    source.assign(num_worlds * num_contacts, 0);
+}
+
+ContactSet ContactSetBuffers::rows(int w) {
+    return {world_rows(position, w, bodies), world_rows(orientation, w, bodies),
+            world_rows(rotation, w, bodies),  world_rows(point, w, contacts),
+            world_rows(normal, w, contacts),  world_rows(depth, w, contacts),
+            world_rows(group, w, contacts),   world_rows(partner, w, contacts),
+            world_rows(source, w, contacts),  world_rows(orient, w, contacts)};
+}
+
+void GraphBuffers::allocate(int num_worlds, int64_t num_bodies, int64_t num_pairs) {
+    bodies = num_bodies;
+    pairs = num_pairs;
+    const int64_t b = num_worlds;
+    touching.assign(b * num_pairs, 0);
+    for (Array<int64_t>* edges : {&edge_from, &edge_to, &targets, &body_pairs}) {
+        edges->assign(b * 2 * num_pairs, 0);
+    }
+    for (Array<int64_t>* per_body : {&component, &component_level, &by_component, &index, &low,
+                                     &stack, &calls, &next_edge, &level, &by_level}) {
+        per_body->assign(b * num_bodies, 0);
+    }
+    on_stack.assign(b * num_bodies, 0);
+    edge_start.assign(b * (num_bodies + 1), 0);
+    body_pair_start.assign(b * (num_bodies + 1), 0);
+    counts.assign(b * (num_bodies + 2), 0);
+}
+
+Graph GraphBuffers::rows(int w) {
+    const int64_t n = bodies, e = 2 * pairs;
+    return {world_rows(touching, w, pairs),      world_rows(edge_from, w, e),
+            world_rows(edge_to, w, e),           world_rows(edge_start, w, n + 1),
+            world_rows(targets, w, e),           world_rows(component, w, n),
+            world_rows(component_level, w, n),   world_rows(by_component, w, n),
+            world_rows(index, w, n),             world_rows(low, w, n),
+            world_rows(on_stack, w, n),          world_rows(stack, w, n),
+            world_rows(calls, w, n),             world_rows(next_edge, w, n),
+            world_rows(level, w, n),             world_rows(by_level, w, n),
+            world_rows(counts, w, n + 2),        world_rows(body_pair_start, w, n + 1),
+            world_rows(body_pairs, w, e)};
+}
+
+StepContext::StepContext(int num_worlds, Geometry geometry, std::vector<int32_t> body_motion,
+                         Vec3 world_gravity, Settings settings, int64_t pair_contacts)
+    : gravity(world_gravity),
+      num_worlds_(num_worlds),
+      num_bodies_(static_cast<int>(body_motion.size())),
+      geometry_(std::move(geometry)),
+      settings_(settings) {
+    const int64_t b = num_worlds_, n = num_bodies_;
+    for (Array<Vec3>* rows : {&position, &velocity, &angular_momentum, &angular_velocity, &force,
+                              &torque, &inverse_moments, &attach_offset_position}) {
+        rows->assign(b * n, {0.0, 0.0, 0.0});
+    }
+    orientation.assign(b * n, {1.0, 0.0, 0.0, 0.0});
+    attach_offset_orientation.assign(b * n, {1.0, 0.0, 0.0, 0.0});
+    rotation.assign(b * n, {});
+    motion.assign(body_motion.data(), n);
+    inverse_mass.assign(b * n, 0.0);
+    friction.assign(b * n, 0.0);
+    restitution.assign(b * n, 0.0);
+    attach_parent.assign(b * n, -1);
+    pair_count.assign(b, 0);
+    asleep.assign(b * n, 0);
+    bounds_.assign(b * n, {});
+    order_.assign(b * n, 0);
+    for (int64_t w = 0; w < b; ++w) {
+        for (int64_t i = 0; i < n; ++i) {
+            order_[w * n + i] = i;
+        }
+    }
+    reach_.assign(b * n, 0.0);
+    start_.assign(b * 3 * n, {0.0, 0.0, 0.0});
+    scratch_.allocate(num_worlds_, n, pair_contacts);
+    wide_.allocate(num_worlds_, n, SUPPORT_CONTACTS * pair_contacts);
+    pairs_of_.assign(b * n, 0);
+    awake_pairs_.assign(b, 0);
+    partner_.assign(b * n, NONE);
+    previous_partner_.assign(b * n, SEVERAL);
+    snapshot_.assign(b * n * SNAPSHOT, 0.0);
+    rest_impulse_.assign(b * n, {0.0, 0.0, 0.0});
+    allocate_pairs(std::max<int64_t>(8, 2 * n));
+}
+
+void StepContext::allocate_pairs(int64_t capacity) {
+    const int64_t b = num_worlds_;
+    if (pair_capacity_ == 0) {
+        pair_a.assign(b * capacity, 0);
+        pair_b.assign(b * capacity, 0);
+        pair_impulse.assign(b * capacity, {0.0, 0.0, 0.0});
+    } else {
+        resize_rows(pair_a, num_worlds_, pair_capacity_, capacity);
+        resize_rows(pair_b, num_worlds_, pair_capacity_, capacity);
+        resize_rows(pair_impulse, num_worlds_, pair_capacity_, capacity);
+    }
+    keys_.assign(b * capacity, 0);
+    spare_.assign(b * capacity, 0);
+    graph_.allocate(num_worlds_, num_bodies_, capacity);
+    pair_capacity_ = capacity;
+}
+
+void StepContext::grow_pairs(int64_t needed) {
+    if (needed > pair_capacity_) {
+        allocate_pairs(2 * needed);
+    }
+}
+
+void StepContext::forget(int first, int last) {
+    for (int64_t k = static_cast<int64_t>(first) * num_bodies_;
+         k < static_cast<int64_t>(last) * num_bodies_; ++k) {
+        previous_partner_[k] = SEVERAL;
+    }
+}
+
+WorldStep StepContext::world(int w) {
+    const int64_t n = num_bodies_, p = pair_capacity_;
+    WorldStep s;
+    s.geo = &geometry_;
+    s.settings = &settings_;
+    s.bodies = {world_rows(position, w, n),         world_rows(orientation, w, n),
+                world_rows(velocity, w, n),         world_rows(angular_momentum, w, n),
+                world_rows(angular_velocity, w, n), world_rows(rotation, w, n),
+                world_rows(force, w, n),            world_rows(torque, w, n)};
+    const Span<const int32_t> motion_rows = {motion.data(), n};
+    const Span<double> mass = world_rows(inverse_mass, w, n);
+    const Span<Vec3> moments = world_rows(inverse_moments, w, n);
+    const Span<double> mu = world_rows(friction, w, n);
+    const Span<double> e = world_rows(restitution, w, n);
+    s.model = {motion_rows, {mass.data, n}, {moments.data, n}, {mu.data, n}, {e.data, n}, gravity};
+    s.attached = {world_rows(attach_parent, w, n), world_rows(attach_offset_position, w, n),
+                  world_rows(attach_offset_orientation, w, n)};
+    s.lists = {world_rows(bounds_, w, n), world_rows(order_, w, n), world_rows(pair_a, w, p),
+               world_rows(pair_b, w, p),  world_rows(keys_, w, p),  world_rows(spare_, w, p),
+               world_rows(reach_, w, n)};
+    s.pair_count = &pair_count[w];
+    s.pair_impulse = world_rows(pair_impulse, w, p);
+    s.start = world_rows(start_, w, 3 * n);
+    s.scratch = scratch_.rows(w);
+    s.wide = wide_.rows(w);
+    s.pairs_of = world_rows(pairs_of_, w, n);
+    s.graph = graph_.rows(w);
+    s.rest = {world_rows(asleep, w, n),          &awake_pairs_[w],
+              world_rows(partner_, w, n),        world_rows(previous_partner_, w, n),
+              world_rows(snapshot_, w, n * SNAPSHOT), world_rows(rest_impulse_, w, n)};
+    return s;
+}
+
+}  // namespace rg

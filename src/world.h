@@ -1,0 +1,186 @@
+// StepContext: every buffer the step reads and writes for a batch of B worlds of one scene,
+// and WorldStep, the rows of one world that the stages work on.
+//
+// Buffers are allocated when the context is made and reused by every step. The pair buffers
+// (and the shock-propagation graph, sized by them) have a capacity per world that grows
+// between steps when a broad phase finds more pairs than fit (step.cpp): a world's step
+// that overflows is abandoned before anything is applied and run again after the growth.
+// Python sees the state, the model and the attachments as numpy arrays over these buffers
+// (bindings), never the scratch.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "body.h"
+#include "broad_phase.h"
+#include "contact_set.h"
+#include "geometry.h"
+
+namespace rg {
+
+// What SolverConfig decides, as the stages take it.
+struct Settings {
+    int collision_passes = 5;  // 0: phase off
+    int contact_passes = 10;   // 0: phase off
+    int shock_sweeps = 2;      // 0: phase off
+    int rotation_order = 2;    // 1, 2 or 3 (integrate.h)
+    bool sweep = false;        // broad phase by sort and sweep (else brute force)
+    bool broad_phase = true;   // whether pairs are listed at all
+    bool sleep = true;         // sleep.h
+    double gravity = 0.0;      // |g|, m/s^2
+    Vec3 up = {0.0, 0.0, 1.0};  // unit vector against gravity
+};
+
+// Shock propagation's work rows (n bodies, P pair capacity).
+struct Graph {
+    Span<uint8_t> touching;         // (P,) the pair touches at the predicted poses
+    Span<int64_t> edge_from;        // (2P,) support edges, lower body to upper
+    Span<int64_t> edge_to;          // (2P,)
+    Span<int64_t> edge_start;       // (n + 1,) CSR form of the edges
+    Span<int64_t> targets;          // (2P,)
+    Span<int64_t> component;        // (n,) Tarjan's strongly connected components
+    Span<int64_t> component_level;  // (n,)
+    Span<int64_t> by_component;     // (n,)
+    Span<int64_t> index;            // (n,) Tarjan's bookkeeping
+    Span<int64_t> low;              // (n,)
+    Span<uint8_t> on_stack;         // (n,)
+    Span<int64_t> stack;            // (n,)
+    Span<int64_t> calls;            // (n,)
+    Span<int64_t> next_edge;        // (n,)
+    Span<int64_t> level;            // (n,) each body's level, 0 for static and kinematic
+    Span<int64_t> by_level;         // (n,) the bodies by level
+    Span<int64_t> counts;           // (n + 2,) counting sorts
+    Span<int64_t> body_pair_start;  // (n + 1,) each body's touching pairs, CSR
+    Span<int64_t> body_pairs;       // (2P,)
+};
+
+// Sleeping's bookkeeping (sleep.h), kept from step to step.
+struct Rest {
+    Span<uint8_t> asleep;             // (n,) skipped by the current step
+    int64_t* awake_pairs;             // how many of the step's listed pairs (the first) are awake
+    Span<int64_t> partner;            // (n,) the one static/kinematic partner, or SEVERAL/NONE
+    Span<int64_t> previous_partner;   // (n,) the same, in the last step
+    Span<double> snapshot;            // (n * SNAPSHOT,) each body's state at the last step's start
+    Span<Vec3> impulse;               // (n,) N s, each such body's impulse in the last step
+};
+
+// Floats of a body's state compared by sleeping: position 3, orientation 4, velocity 3,
+// angular momentum 3, angular velocity 3, rotation 9.
+constexpr int SNAPSHOT = 25;
+
+// One world's rows of every buffer: what a step of that world reads and writes.
+struct WorldStep {
+    const Geometry* geo;
+    const Settings* settings;
+    BodyStates bodies;
+    BodyModel model;
+    Attachments attached;
+    PairLists lists;
+    int64_t* pair_count;     // may exceed the capacity: the buffers are too small
+    Span<Vec3> pair_impulse;  // (P,) N s, each pair's impulse on its body a in the current step
+    Span<Vec3> start;        // (3 n,) velocity, angular momentum and angular velocity when
+                             //        the step's impulse stages began (restored to rerun them)
+    ContactSet scratch;      // one pair's contacts (C, the pair contact capacity)
+    ContactSet wide;         // one body's contacts with all its frozen supports
+    Span<int64_t> pairs_of;  // (n,) in how many listed pairs each body is
+    Graph graph;
+    Rest rest;
+
+    int num_bodies() const { return static_cast<int>(bodies.position.size); }
+    int64_t pair_capacity() const { return lists.pair_a.size; }
+};
+
+// Room for one body's contacts with its frozen supports in shock propagation, in pair
+// capacities (a box on up to 4 boxes combines them all; beyond that supports are resolved
+// one by one).
+constexpr int SUPPORT_CONTACTS = 4;
+
+// The batched buffers behind a ContactSet: B worlds of n bodies and C contacts.
+struct ContactSetBuffers {
+    Array<Vec3> position, point, normal;
+    Array<Quat> orientation;
+    Array<Mat3> rotation;
+    Array<double> depth, orient;
+    Array<int64_t> group, partner, source;
+    int64_t bodies = 0, contacts = 0;
+
+    void allocate(int num_worlds, int64_t num_bodies, int64_t num_contacts);
+    ContactSet rows(int w);
+};
+
+// The batched buffers behind a Graph: B worlds of n bodies and P pairs.
+struct GraphBuffers {
+    Array<uint8_t> touching, on_stack;
+    Array<int64_t> edge_from, edge_to, edge_start, targets, component, component_level,
+        by_component, index, low, stack, calls, next_edge, level, by_level, counts,
+        body_pair_start, body_pairs;
+    int64_t bodies = 0, pairs = 0;
+
+    void allocate(int num_worlds, int64_t num_bodies, int64_t num_pairs);
+    Graph rows(int w);
+};
+
+class StepContext {
+public:
+    // B worlds of n bodies (motion (n,)), their geometry, and the contact capacity of one
+    // pair (max_pair_contacts in geometry.py).
+    StepContext(int num_worlds, Geometry geometry, std::vector<int32_t> motion, Vec3 gravity,
+                Settings settings, int64_t pair_contacts);
+
+    int num_worlds() const { return num_worlds_; }
+    int num_bodies() const { return num_bodies_; }
+    int64_t pair_capacity() const { return pair_capacity_; }
+    const Geometry& geometry() const { return geometry_; }
+    const Settings& settings() const { return settings_; }
+
+    // The rows of world w.
+    WorldStep world(int w);
+
+    // Make room for at least `needed` pairs per world, keeping the pairs listed so far.
+    void grow_pairs(int64_t needed);
+
+    // No body of worlds [first, last) sleeps in their next step: what changed cannot be seen
+    // in their state (masses, materials, attachments, a reset).
+    void forget(int first, int last);
+
+    // Batched state (B, n), model and attachments: numpy arrays in the bindings.
+    Array<Vec3> position, velocity, angular_momentum, angular_velocity, force, torque;
+    Array<Quat> orientation;
+    Array<Mat3> rotation;
+    Array<int32_t> motion;  // (n,)
+    Array<double> inverse_mass, friction, restitution;
+    Array<Vec3> inverse_moments;
+    Vec3 gravity;
+    Array<int32_t> attach_parent;
+    Array<Vec3> attach_offset_position;
+    Array<Quat> attach_offset_orientation;
+    // What the last step listed, per world: read by queries.
+    Array<int64_t> pair_count;      // (B,)
+    Array<int32_t> pair_a, pair_b;  // (B, P)
+    Array<Vec3> pair_impulse;       // (B, P)
+    Array<uint8_t> asleep;          // (B, n)
+
+private:
+    void allocate_pairs(int64_t capacity);
+
+    int num_worlds_, num_bodies_;
+    int64_t pair_capacity_ = 0;
+    Geometry geometry_;
+    Settings settings_;
+    // broad phase, per body (n) and per pair (P)
+    Array<Aabb> bounds_;
+    Array<int64_t> order_, keys_, spare_;
+    Array<double> reach_;
+    Array<Vec3> start_;  // (B, 3 n)
+    // impulse stages
+    ContactSetBuffers scratch_, wide_;
+    Array<int64_t> pairs_of_;
+    GraphBuffers graph_;
+    // sleeping
+    Array<int64_t> awake_pairs_, partner_, previous_partner_;
+    Array<double> snapshot_;
+    Array<Vec3> rest_impulse_;
+};
+
+}  // namespace rg
