@@ -42,6 +42,15 @@ Vec3 effective_angular_velocity(const Mat3& r, Vec3 inverse_moments, Vec3 l, Vec
 
 }  // namespace
 
+int rotation_substeps(double speed, double dt) {
+    const double turns = std::ceil(speed * dt / QUARTER_TURN);
+    // compared as a double: a huge (or NaN) speed must not reach the conversion to int
+    if (!(turns > 1.0)) {
+        return 1;
+    }
+    return turns >= MAX_ROTATION_SUBSTEPS ? MAX_ROTATION_SUBSTEPS : static_cast<int>(turns);
+}
+
 void refresh_rotation_and_angular_velocity(const BodyStates& bodies, const BodyModel& model) {
     for (int64_t i = 0; i < bodies.position.size; ++i) {
         bodies.rotation[i] = rotation_from_quaternion(bodies.orientation[i]);
@@ -89,7 +98,7 @@ void update_positions(const BodyStates& bodies, const BodyModel& model, double d
         const Vec3 l = bodies.angular_momentum[i], tau = bodies.torque[i];
         const Vec3 inverse_moments = model.inverse_moments[i];
         const double speed = std::sqrt(w.x * w.x + w.y * w.y + w.z * w.z);
-        const int substeps = std::max(1, static_cast<int>(std::ceil(speed * dt / QUARTER_TURN)));
+        const int substeps = rotation_substeps(speed, dt);
         const double h = dt / substeps;
         for (int k = 0; k < substeps; ++k) {
             const Vec3 bar = effective_angular_velocity(r, inverse_moments, l, tau, h, order);

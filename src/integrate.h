@@ -7,12 +7,22 @@
 //     order 2: omega_bar = omega + h/2 alpha                            (Buss's second order)
 //     order 3: omega_bar = omega + h/2 alpha + h^2/6 omega'' + h^2/12 alpha x omega
 //              (Buss's third order), alpha = I^-1 (L x omega + tau).
-// A step is cut into sub-steps of at most a quarter turn (|omega| h <= pi/2, slide 14).
+// A step is cut into sub-steps of at most a quarter turn (|omega| h <= pi/2, slide 14), and into
+// at most MAX_ROTATION_SUBSTEPS of them: beyond 64 quarter turns a step (|omega| > 32 pi / dt,
+// 24,127 rad/s at dt = 1/240 s) each sub-step turns further, so a step's cost stays bounded
+// whatever the speed. The exact rotation of slide 13 is still exact for a constant omega (a
+// sphere, a symmetric top about its axis); what grows is the error of the effective angular
+// velocity over the longer sub-steps (a tumbling asymmetric body), and L stays exact.
 #pragma once
 
 #include "body.h"
 
 namespace rg {
+
+constexpr int MAX_ROTATION_SUBSTEPS = 64;
+
+// Sub-steps of the rotation update for angular speed |omega| (rad/s) over dt (s).
+int rotation_substeps(double speed, double dt);
 
 // R(q) for every body and omega = I(t)^-1 L for the dynamic ones (after q or L were set).
 void refresh_rotation_and_angular_velocity(const BodyStates& bodies, const BodyModel& model);

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import rigid_gym as rg
+from rigid_gym import _core
 from rigid_gym import analytic
 from rigid_gym import quaternion as quat
 from rigid_gym.report import scenes
@@ -112,6 +113,33 @@ def test_quarter_turn_limit_splits_a_fast_step_into_substeps():
     coarse.step(10)
     fine.step(20)
     np.testing.assert_array_equal(coarse.orientation, fine.orientation)
+
+
+def test_rotation_substeps_are_quarter_turns_and_at_most_64():
+    """A step is cut into sub-steps of at most a quarter turn, but into no more than 64 of
+    them (src/integrate.h), so its cost is bounded whatever the speed; a NaN speed (never
+    reached: setters refuse it) takes one."""
+    dt = 1 / 240
+    quarter = (np.pi / 2) / dt  # rad/s that turn a quarter per step
+    assert _core.MAX_ROTATION_SUBSTEPS == 64
+    for speed, substeps in ((0.0, 1), (0.9 * quarter, 1), (3.5 * quarter, 4),
+                            (64 * quarter, 64), (65 * quarter, 64), (1e9, 64), (1e300, 64),
+                            (np.inf, 64), (np.nan, 1)):
+        assert _core.rotation_substeps(speed, dt) == substeps, speed
+
+
+def test_a_box_spun_at_a_billion_radians_per_second_on_the_table_stays_finite():
+    """1e9 rad/s (a corrupted state, or a user's typo): the capped rotation keeps each step
+    short (benchmarks: 1000 steps well under a second) and every contact stays finite."""
+    scene = rg.Scene()
+    scene.add_ground(friction=0.5)
+    cube = scene.add_body(rg.Box((0.025,) * 3), mass=0.1, position=(0.0, 0.0, 0.025))
+    world = rg.World(scene, dt=1 / 240)
+    world.set_velocity(cube, angular_velocity=(1e9, 0.0, 0.0))
+    world.step(1000)
+    for a in world.state:
+        assert np.all(np.isfinite(a))
+    assert np.all(np.isfinite(world.contacts(margin=0.01).depth))
 
 
 def test_spin_about_a_principal_axis_is_exact_even_far_past_a_quarter_turn():

@@ -6,6 +6,7 @@
 #include "body.h"
 #include "geometry.h"
 #include "impulse.h"
+#include "integrate.h"
 #include "narrow_phase.h"
 #include "step.h"
 
@@ -64,6 +65,10 @@ void bind_geometry(nb::module_& m) {
         edges.insert(edges.end(), {e[0], e[1]});
     }
     m.attr("BOX_EDGES") = hand_over(std::move(edges), {12, 2});
+    m.attr("MAX_ROTATION_SUBSTEPS") = MAX_ROTATION_SUBSTEPS;
+    m.def("rotation_substeps", &rotation_substeps, nb::arg("speed"), nb::arg("dt"),
+          "Sub-steps of the rotation update for angular speed |omega| (rad/s) over dt (s): "
+          "quarter turns, at most MAX_ROTATION_SUBSTEPS (src/integrate.h).");
     m.def(
         "add_point_mass_matrix",
         [](double inverse_mass, const std::array<std::array<double, 3>, 3>& rotation,
