@@ -40,6 +40,10 @@ class SolverConfig:
         sort-and-sweep from ``collision.SWEEP_MIN_BODIES`` bounded bodies.
     sleep: skip a body resting alone on a static or kinematic one while its step is a fixed
         point (``src/sleep.h``); exact, so off only to measure what it saves.
+    detect_every_pass: run the narrow phase again at the predicted poses in every pass of
+        every impulse phase (the original GBF formulation) instead of finding each pair's
+        contacts once per step and carrying their separations through the passes
+        (``src/contacts.h``); kept to measure what the difference costs and changes.
     """
 
     collision_passes: int = 5
@@ -49,6 +53,7 @@ class SolverConfig:
     box_edge_segments: int = 4
     sweep: bool | None = None
     sleep: bool = True
+    detect_every_pass: bool = False
 
     def __post_init__(self):
         for name, low, high in (("collision_passes", 0, 1000), ("contact_passes", 0, 1000),
@@ -63,8 +68,10 @@ class SolverConfig:
                              f"got {self.rotation_order!r}")
         if self.sweep not in (None, True, False):
             raise ValueError(f"SolverConfig.sweep must be None, True or False, got {self.sweep!r}")
-        if not isinstance(self.sleep, bool):
-            raise ValueError(f"SolverConfig.sleep must be True or False, got {self.sleep!r}")
+        for name in ("sleep", "detect_every_pass"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"SolverConfig.{name} must be True or False, got "
+                                 f"{getattr(self, name)!r}")
 
     @classmethod
     def for_scene(cls, scene: Scene, **overrides) -> SolverConfig:

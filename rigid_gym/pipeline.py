@@ -50,7 +50,8 @@ def settings(config: SolverConfig, gravity: np.ndarray, sweep: bool) -> dict:
     return dict(collision_passes=config.collision_passes, contact_passes=config.contact_passes,
                 shock_sweeps=config.shock_sweeps, rotation_order=config.rotation_order,
                 sweep=bool(sweep), broad_phase=config.phases()["broad_phase"],
-                sleep=config.sleep, gravity=magnitude, up=tuple(float(u) for u in up))
+                sleep=config.sleep, detect_every_pass=config.detect_every_pass,
+                gravity=magnitude, up=tuple(float(u) for u in up))
 
 
 def advance(world, steps: int, phases: int = EVERY_PHASE) -> None:

@@ -1,4 +1,4 @@
-// The work rows of the impulse stages: predicted poses and the contacts being resolved.
+// The work rows of the impulse stages: the contacts being resolved.
 #pragma once
 
 #include "body.h"
@@ -6,12 +6,10 @@
 
 namespace rg {
 
-// Poses predicted for the end of the step (n,), and contacts (C,) with their bookkeeping:
-// the contacts of one pair, or of one body with all its frozen supports (shock propagation).
+// Contacts (C,) being resolved with their bookkeeping: the contacts of one pair, or of one
+// body with all its frozen supports (shock propagation), at the poses predicted for the end of
+// the step.
 struct ContactSet {
-    Span<Vec3> position;      // (n,) predicted centres: contacts' lever arms start here
-    Span<Quat> orientation;   // (n,)
-    Span<Mat3> rotation;      // (n,)
     Span<Vec3> point;         // (C,) m, world
     Span<Vec3> normal;        // (C,) towards the body being resolved
     Span<double> depth;       // (C,) m from the narrow phase, then the approach speed v_n, m/s
@@ -19,6 +17,8 @@ struct ContactSet {
     Span<int64_t> partner;    // (C,) the body on the other side
     Span<int64_t> source;     // (C,) the listed pair it came from
     Span<double> orient;      // (C,) +1 if the resolved body is the pair's a, -1 if its b
+    Span<Vec3> centre_a;      // (C,) predicted centre of the resolved body: levers start here
+    Span<Vec3> centre_b;      // (C,) predicted centre of the partner
 
     ContactBuffer buffer() const { return {point, normal, depth}; }
 };

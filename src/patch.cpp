@@ -315,7 +315,7 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
     }
     d[tips] = n;
     // relative velocity at c and relative angular velocity
-    const Vec3 ra = sub(c, set.position[a]), rb = sub(c, set.position[b]);
+    const Vec3 ra = sub(c, set.centre_a[seed]), rb = sub(c, set.centre_b[seed]);
     const Vec3 v = relative_point_velocity(bodies, a, b, ra, rb);
     const double vn = v.x * n.x + v.y * n.y + v.z * n.z;
     const Vec3 w = sub(bodies.angular_velocity[a], bodies.angular_velocity[b]);

@@ -4,6 +4,9 @@
 // the contact normal against gravity; side contacts get both directions. Its levels
 // (levels.h) are resolved in order: each body of a level against all its frozen supports at
 // once, then the pairs inside the level with both bodies movable, for up to `sweeps` sweeps.
+#include <algorithm>
+
+#include "contacts.h"
 #include "levels.h"
 #include "solver.h"
 
@@ -15,28 +18,31 @@ namespace {
 // the two bodies are put on the same level.
 constexpr double SIDE_CONTACT = 0.1;
 
-// Bodies closer than this (m) at the predicted poses count as touching in shock propagation:
-// in the contact graph (bodies falling together touch without overlapping, yet the upper one
-// rests on the lower) and in a body's patches against its frozen supports (a rocking box's
-// lifting corners belong to the face it rests on; the patch wrench decides whether the patch
-// holds, j_n > 0, or separates).
-constexpr double GRAPH_MARGIN = 1e-4;
-
 constexpr Vec3 NO_LOOKAHEAD = {0.0, 0.0, 0.0};
 
-// Which pairs touch at the predicted poses (graph.touching) and the support edges between
-// their bodies (lower to upper, both ways for side contacts); returns the number of edges.
+// Which pairs touch at the predicted poses (within GRAPH_MARGIN: graph.touching) and the
+// support edges between their bodies (lower to upper, both ways for side contacts), judged by
+// the pair's deepest contact; returns the number of edges.
 int64_t build_contact_graph(WorldStep& w, int64_t pairs, double dt) {
     const Graph& graph = w.graph;
+    const ContactSet& scratch = w.scratch;
     const Vec3 up = w.settings->up;
     int64_t edges = 0;
     for (int64_t k = 0; k < pairs; ++k) {
         const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
-        graph.touching[k] = find_pair_contacts(w, w.scratch, a, b, dt, NO_LOOKAHEAD, GRAPH_MARGIN) > 0;
+        const int64_t found = std::min(
+            gather_pair(w, {k, a, -GRAPH_MARGIN}, dt, NO_LOOKAHEAD, scratch, 0), scratch.depth.size);
+        graph.touching[k] = found > 0;
         if (!graph.touching[k] || w.model.motion[b] != DYNAMIC) {
             continue;  // b is the ground or a gripper: a rests on level 0
         }
-        const double rise = dot(w.scratch.normal[0], up);
+        int64_t deepest = 0;
+        for (int64_t i = 1; i < found; ++i) {
+            if (scratch.depth[i] > scratch.depth[deepest]) {
+                deepest = i;
+            }
+        }
+        const double rise = dot(scratch.normal[deepest], up);
         if (rise > -SIDE_CONTACT) {  // b below a (or beside it)
             graph.edge_from[edges] = b;
             graph.edge_to[edges] = a;
@@ -52,14 +58,12 @@ int64_t build_contact_graph(WorldStep& w, int64_t pairs, double dt) {
 }
 
 // One body of the level being processed against all its frozen supports at once: their
-// contacts (deepest first per pair, normals turned towards body) go into w.wide and are
-// resolved as patches, so a box straddling two frozen boxes is held by both (one support
-// alone could hold it only with its centre of pressure on an edge).
+// contacts (normals turned towards body) go into w.wide and are resolved as patches, so a box
+// straddling two frozen boxes is held by both (one support alone could hold it only with its
+// centre of pressure on an edge).
 int resolve_supported_body(WorldStep& w, int body, int64_t current, double dt) {
     const Graph& graph = w.graph;
-    const ContactSet& scratch = w.scratch;
     const ContactSet& wide = w.wide;
-    const int64_t capacity = wide.depth.size;
     int64_t count = 0;
     int applied = 0;
     for (int64_t s = graph.body_pair_start[body]; s < graph.body_pair_start[body + 1]; ++s) {
@@ -69,23 +73,13 @@ int resolve_supported_body(WorldStep& w, int body, int64_t current, double dt) {
         if (w.model.motion[other] == DYNAMIC && graph.level[other] >= current) {
             continue;  // not frozen: resolved pair by pair
         }
-        const int64_t found = find_pair_contacts(w, scratch, a, b, dt, NO_LOOKAHEAD, GRAPH_MARGIN);
-        if (count + found > capacity) {
+        const int64_t found = gather_pair(w, {k, body, -GRAPH_MARGIN}, dt, NO_LOOKAHEAD, wide, count);
+        if (count + found > wide.depth.size) {
             // no room to combine it: resolve this support on its own rather than drop it
             applied += resolve_pair(w, k, a, b, dt, NO_LOOKAHEAD, SHOCK, 0.0, {a == body, b == body});
             continue;
         }
-        const double sign = a == body ? 1.0 : -1.0;
-        for (int64_t i = 0; i < found; ++i) {
-            wide.point[count] = scratch.point[i];
-            wide.normal[count] = scale(sign, scratch.normal[i]);
-            wide.partner[count] = other;
-            wide.source[count] = k;
-            wide.orient[count] = sign;
-            count += 1;
-        }
-        wide.position[other] = scratch.position[other];
-        wide.position[body] = scratch.position[body];
+        count += found;
     }
     return applied + resolve_patches(w, body, {true, false}, wide, count, SHOCK, 0.0);
 }

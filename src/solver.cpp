@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "contacts.h"
 #include "impulse.h"
 
 namespace rg {
@@ -18,28 +19,10 @@ constexpr double SAME_MOTION = 1e-9;
 // Contacts of a pair whose normals agree within this cosine form one patch (one impulse).
 constexpr double PATCH_COS = 0.95;
 
-// Body i's pose after dt at its current velocity, into set's rows of i. Dynamic bodies also
-// move by lookahead (m).
-void predict_pose(const WorldStep& w, const ContactSet& set, int i, double dt, Vec3 lookahead) {
-    Vec3 x = w.bodies.position[i];
-    Quat q = w.bodies.orientation[i];
-    const int32_t motion = w.model.motion[i];
-    if (motion == DYNAMIC) {
-        x = add(x, lookahead);
-    }
-    if (motion != STATIC) {
-        const Vec3 v = w.bodies.velocity[i];
-        x = {x.x + dt * v.x, x.y + dt * v.y, x.z + dt * v.z};
-        q = rotate_by_angular_velocity(q, w.bodies.angular_velocity[i], dt);
-    }
-    set.position[i] = x;
-    set.orientation[i] = q;
-    set.rotation[i] = rotation_from_quaternion(q);
-}
-
-// v_a - v_b at world point p, each body's lever arm taken from its predicted centre.
-Vec3 relative_velocity(const WorldStep& w, const ContactSet& set, int a, int b, Vec3 p) {
-    return relative_point_velocity(w.bodies, a, b, sub(p, set.position[a]), sub(p, set.position[b]));
+// v_a - v_b at contact i's point, each body's lever arm taken from its predicted centre.
+Vec3 relative_velocity(const WorldStep& w, const ContactSet& set, int a, int b, int64_t i) {
+    const Vec3 p = set.point[i];
+    return relative_point_velocity(w.bodies, a, b, sub(p, set.centre_a[i]), sub(p, set.centre_b[i]));
 }
 
 // Do bodies p and q move as one rigid body, to within SAME_MOTION (same omega and same
@@ -158,24 +141,16 @@ bool alone(const WorldStep& w, int a, int b) {
 
 }  // namespace
 
-int64_t find_pair_contacts(WorldStep& w, const ContactSet& set, int a, int b, double dt,
-                           Vec3 lookahead, double margin) {
-    predict_pose(w, set, a, dt, lookahead);
-    predict_pose(w, set, b, dt, lookahead);
-    return collide_bodies(*w.geo, a, b, {set.position[a], set.rotation[a]},
-                          {set.position[b], set.rotation[b]}, margin, set.buffer(), 0);
+Vec3 collision_lookahead(const BodyModel& model, double dt) {
+    const Vec3 g = model.gravity;
+    return {dt * dt * g.x, dt * dt * g.y, dt * dt * g.z};
 }
 
 int resolve_pair(WorldStep& w, int64_t k, int a, int b, double dt, Vec3 lookahead,
                  ImpulseMode mode, double ramp_e, Movable movable) {
     const ContactSet& set = w.scratch;
-    const int64_t count = find_pair_contacts(w, set, a, b, dt, lookahead, 0.0);
-    for (int64_t i = 0; i < count; ++i) {
-        set.partner[i] = b;
-        set.source[i] = k;
-        set.orient[i] = 1.0;
-    }
-    return resolve_patches(w, a, movable, set, count, mode, ramp_e);
+    const int64_t count = gather_pair(w, {k, a, 0.0}, dt, lookahead, set, 0);
+    return resolve_patches(w, a, movable, set, std::min(count, set.depth.size), mode, ramp_e);
 }
 
 // The contacts are grouped into patches of similar normal and rigidly co-moving partners (a
@@ -200,7 +175,7 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
     const BodyModel& model = w.model;
     // approach speed of every contact, kept in set.depth (negative: approaching)
     for (int64_t i = 0; i < count; ++i) {
-        const Vec3 v = relative_velocity(w, set, a, static_cast<int>(set.partner[i]), set.point[i]);
+        const Vec3 v = relative_velocity(w, set, a, static_cast<int>(set.partner[i]), i);
         set.depth[i] = dot(v, set.normal[i]);
         set.group[i] = -1;
     }
@@ -231,11 +206,11 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
         Vec3 c, n;
         double radius;
         approach_weighted_centre(set, seed, count, c, n, radius);
-        const Vec3 v = relative_velocity(w, set, a, b, c);
+        const Vec3 ra = sub(c, set.centre_a[seed]), rb = sub(c, set.centre_b[seed]);
+        const Vec3 v = relative_point_velocity(s, a, b, ra, rb);
         if (dot(v, n) >= -REST_SPEED) {
             continue;
         }
-        const Vec3 ra = sub(c, set.position[a]), rb = sub(c, set.position[b]);
         Mat3 k = {};
         if (movable.a) {
             add_point_mass_matrix(model.inverse_mass[a], s.rotation[a], model.inverse_moments[a], ra, k);
@@ -255,9 +230,7 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
 }
 
 void resolve_world_contacts(WorldStep& w, int64_t pairs, double dt, ImpulseMode mode, int passes) {
-    const Vec3 g = w.model.gravity;
-    const Vec3 lookahead = mode == COLLISION ? Vec3{dt * dt * g.x, dt * dt * g.y, dt * dt * g.z}
-                                             : Vec3{0.0, 0.0, 0.0};
+    const Vec3 lookahead = mode == COLLISION ? collision_lookahead(w.model, dt) : Vec3{0.0, 0.0, 0.0};
     const bool ramp = mode == CONTACT;
     if (ramp) {
         count_pairs_of_bodies(w, pairs);

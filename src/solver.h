@@ -44,14 +44,12 @@ void resolve_world_contacts(WorldStep& w, int64_t pairs, double dt, ImpulseMode 
 // The shock-propagation stage over the first `pairs` listed pairs (shock.cpp).
 void propagate_world_shock(WorldStep& w, int64_t pairs, double dt);
 
-// Contacts of bodies a, b at their predicted poses (written to `set`: poses and contacts),
-// deepest first, those deeper than -margin (m); returns the count. Dynamic bodies are also
-// moved by lookahead (m).
-int64_t find_pair_contacts(WorldStep& w, const ContactSet& set, int a, int b, double dt,
-                           Vec3 lookahead, double margin);
+// What the collision stage moves dynamic bodies by when predicting their poses: dt^2 g (m).
+Vec3 collision_lookahead(const BodyModel& model, double dt);
 
-// Resolve the contacts of pair k = (a, b) at their predicted poses (resolve_patches); returns
-// the number of impulses applied. COLLISION uses the pair's restitution, CONTACT ramp_e, SHOCK 0.
+// Resolve the contacts of pair k = (a, b) at their predicted poses (contacts.h, then
+// resolve_patches); returns the number of impulses applied. COLLISION uses the pair's
+// restitution, CONTACT ramp_e, SHOCK 0.
 int resolve_pair(WorldStep& w, int64_t k, int a, int b, double dt, Vec3 lookahead,
                  ImpulseMode mode, double ramp_e, Movable movable);
 

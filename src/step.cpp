@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "contacts.h"
 #include "integrate.h"
 #include "sleep.h"
 #include "solver.h"
@@ -61,20 +62,33 @@ void clear_impulses(WorldStep& w, int64_t count) {
     }
 }
 
+// The step's contacts, found by the first impulse stage that needs them (contacts.h), at
+// the poses it predicts: the collision stage's (old velocities, dt^2 g ahead) or the contact
+// and shock stages' (new velocities), which are the same poses until an impulse or a force
+// acts. Found once per step, also when a profiled step runs its stages in separate calls.
+void find_contacts(WorldStep& w, int64_t count, double dt, Vec3 lookahead) {
+    if (!*w.contacts.detected) {
+        detect_contacts(w, count, dt, lookahead);
+    }
+}
+
 // The collision, velocity update, contact and shock stages (those whose bits are set) over
 // the first `count` listed pairs (the awake ones, with sleeping).
 void impulse_stages(WorldStep& w, int phases, double dt, int64_t count) {
     const Settings& c = *w.settings;
     if ((phases & COLLISION_PHASE) && c.collision_passes > 0 && count > 0) {
+        find_contacts(w, count, dt, collision_lookahead(w.model, dt));
         resolve_world_contacts(w, count, dt, COLLISION, c.collision_passes);
     }
     if (phases & VELOCITY_PHASE) {
         update_velocities(w.bodies, w.model, dt);
     }
     if ((phases & CONTACT_PHASE) && c.contact_passes > 0 && count > 0) {
+        find_contacts(w, count, dt, {0.0, 0.0, 0.0});
         resolve_world_contacts(w, count, dt, CONTACT, c.contact_passes);
     }
     if ((phases & SHOCK_PHASE) && c.shock_sweeps > 0 && c.gravity > 0.0 && count > 0) {
+        find_contacts(w, count, dt, {0.0, 0.0, 0.0});
         propagate_world_shock(w, count, dt);
     }
 }
@@ -105,6 +119,7 @@ int64_t step_world(WorldStep& w, int64_t steps, int phases, double dt) {
             }
             clear_impulses(w, count);
             keep_velocities(w, true);
+            *w.contacts.detected = 0;
             *w.rest.awake_pairs = count;
             if (c.sleep) {
                 mark_asleep(w, count);
@@ -138,6 +153,7 @@ int64_t step_world(WorldStep& w, int64_t steps, int phases, double dt) {
                         return done;
                     }
                     clear_impulses(w, more);
+                    *w.contacts.detected = 0;
                     impulse_stages(w, IMPULSE_PHASES, dt, more);
                 }
             }
@@ -173,6 +189,9 @@ void advance(StepContext& context, int64_t steps, int phases, double dt) {
                 }
             }
         });
+        if (phases & POSITION_PHASE) {  // steps are whole: the pool may grow for the next
+            context.fit_contact_rows();
+        }
         if (std::all_of(done.begin(), done.end(), [&](int64_t d) { return d == steps; })) {
             return;
         }

@@ -2,6 +2,7 @@
 #include "world.h"
 
 #include <algorithm>
+#include <cmath>
 #include <utility>
 
 #include "sleep.h"
@@ -31,27 +32,57 @@ void resize_rows(Array<T>& a, int num_worlds, int64_t old_count, int64_t new_cou
 
 }  // namespace
 
-void ContactSetBuffers::allocate(int num_worlds, int64_t num_bodies, int64_t num_contacts) {
-    bodies = num_bodies;
+void ContactSetBuffers::allocate(int num_worlds, int64_t num_contacts) {
     contacts = num_contacts;
-    position.assign(num_worlds * num_bodies, {});
-    orientation.assign(num_worlds * num_bodies, {});
-    rotation.assign(num_worlds * num_bodies, {});
-    point.assign(num_worlds * num_contacts, {});
-    normal.assign(num_worlds * num_contacts, {});
-    depth.assign(num_worlds * num_contacts, 0.0);
-    orient.assign(num_worlds * num_contacts, 0.0);
-    group.assign(num_worlds * num_contacts, 0);
-    partner.assign(num_worlds * num_contacts, 0);
-    source.assign(num_worlds * num_contacts, 0);
+    const int64_t rows = num_worlds * num_contacts;
+    for (Array<Vec3>* vectors : {&point, &normal, &centre_a, &centre_b}) {
+        vectors->assign(rows, {0.0, 0.0, 0.0});
+    }
+    depth.assign(rows, 0.0);
+    orient.assign(rows, 0.0);
+    group.assign(rows, 0);
+    partner.assign(rows, 0);
+    source.assign(rows, 0);
 }
 
 ContactSet ContactSetBuffers::rows(int w) {
-    return {world_rows(position, w, bodies), world_rows(orientation, w, bodies),
-            world_rows(rotation, w, bodies),  world_rows(point, w, contacts),
-            world_rows(normal, w, contacts),  world_rows(depth, w, contacts),
-            world_rows(group, w, contacts),   world_rows(partner, w, contacts),
-            world_rows(source, w, contacts),  world_rows(orient, w, contacts)};
+    return {world_rows(point, w, contacts),    world_rows(normal, w, contacts),
+            world_rows(depth, w, contacts),    world_rows(group, w, contacts),
+            world_rows(partner, w, contacts),  world_rows(source, w, contacts),
+            world_rows(orient, w, contacts),   world_rows(centre_a, w, contacts),
+            world_rows(centre_b, w, contacts)};
+}
+
+void ContactCacheBuffers::allocate_pairs(int num_worlds, int64_t num_pairs) {
+    pairs = num_pairs;
+    first.assign(num_worlds * num_pairs, -1);
+    count.assign(num_worlds * num_pairs, 0);
+    for (Array<Vec3>* per_pair : {&centre_a, &centre_b, &shift_a, &shift_b, &turn_a, &turn_b}) {
+        per_pair->assign(num_worlds * num_pairs, {0.0, 0.0, 0.0});
+    }
+    used.assign(num_worlds, 0);
+    needed.assign(num_worlds, 0);
+    detected.assign(num_worlds, 0);  // the pairs' rows are gone: find them again
+}
+
+void ContactCacheBuffers::allocate_rows(int num_worlds, int64_t num_rows) {
+    rows = num_rows;
+    for (Array<Vec3>* per_row : {&point, &normal, &arm_a, &arm_b}) {
+        per_row->assign(num_worlds * num_rows, {0.0, 0.0, 0.0});
+    }
+    depth.assign(num_worlds * num_rows, 0.0);
+    detected.assign(num_worlds, 0);
+}
+
+ContactCache ContactCacheBuffers::view(int w) {
+    return {world_rows(first, w, pairs),    world_rows(count, w, pairs),
+            world_rows(centre_a, w, pairs), world_rows(centre_b, w, pairs),
+            world_rows(shift_a, w, pairs),  world_rows(shift_b, w, pairs),
+            world_rows(turn_a, w, pairs),   world_rows(turn_b, w, pairs),
+            world_rows(point, w, rows),     world_rows(normal, w, rows),
+            world_rows(depth, w, rows),     world_rows(arm_a, w, rows),
+            world_rows(arm_b, w, rows),     &used[w],
+            &needed[w],                     &detected[w]};
 }
 
 void GraphBuffers::allocate(int num_worlds, int64_t num_bodies, int64_t num_pairs) {
@@ -117,8 +148,15 @@ StepContext::StepContext(int num_worlds, Geometry geometry, std::vector<int32_t>
     }
     reach_.assign(b * n, 0.0);
     start_.assign(b * 3 * n, {0.0, 0.0, 0.0});
-    scratch_.allocate(num_worlds_, n, pair_contacts);
-    wide_.allocate(num_worlds_, n, SUPPORT_CONTACTS * pair_contacts);
+    scratch_.allocate(num_worlds_, pair_contacts);
+    wide_.allocate(num_worlds_, SUPPORT_CONTACTS * pair_contacts);
+    body_reach_.assign(n, 0.0);
+    for (int i = 0; i < num_bodies_; ++i) {
+        if (geometry_.body_unbounded[i] == 0) {
+            const Vec3 c = geometry_.body_bound_center[i], e = geometry_.body_bound_half[i];
+            body_reach_[i] = length({std::fabs(c.x) + e.x, std::fabs(c.y) + e.y, std::fabs(c.z) + e.z});
+        }
+    }
     pairs_of_.assign(b * n, 0);
     awake_pairs_.assign(b, 0);
     partner_.assign(b * n, NONE);
@@ -126,6 +164,7 @@ StepContext::StepContext(int num_worlds, Geometry geometry, std::vector<int32_t>
     snapshot_.assign(b * n * SNAPSHOT, 0.0);
     rest_impulse_.assign(b * n, {0.0, 0.0, 0.0});
     allocate_pairs(std::max<int64_t>(8, 2 * n));
+    contacts_.allocate_rows(num_worlds_, 8 * pair_capacity_);
 }
 
 void StepContext::allocate_pairs(int64_t capacity) {
@@ -142,7 +181,18 @@ void StepContext::allocate_pairs(int64_t capacity) {
     keys_.assign(b * capacity, 0);
     spare_.assign(b * capacity, 0);
     graph_.allocate(num_worlds_, num_bodies_, capacity);
+    contacts_.allocate_pairs(num_worlds_, capacity);
     pair_capacity_ = capacity;
+}
+
+void StepContext::fit_contact_rows() {
+    int64_t needed = 0;
+    for (int w = 0; w < num_worlds_; ++w) {
+        needed = std::max(needed, contacts_.needed[w]);
+    }
+    if (needed > contacts_.rows) {
+        contacts_.allocate_rows(num_worlds_, 2 * needed);
+    }
 }
 
 void StepContext::grow_pairs(int64_t needed) {
@@ -181,6 +231,8 @@ WorldStep StepContext::world(int w) {
     s.pair_count = &pair_count[w];
     s.pair_impulse = world_rows(pair_impulse, w, p);
     s.start = world_rows(start_, w, 3 * n);
+    s.contacts = contacts_.view(w);
+    s.body_reach = {body_reach_.data(), n};
     s.scratch = scratch_.rows(w);
     s.wide = wide_.rows(w);
     s.pairs_of = world_rows(pairs_of_, w, n);

@@ -28,6 +28,7 @@ struct Settings {
     bool sweep = false;        // broad phase by sort and sweep (else brute force)
     bool broad_phase = true;   // whether pairs are listed at all
     bool sleep = true;         // sleep.h
+    bool detect_every_pass = false;  // contacts.h: the narrow phase in every pass
     double gravity = 0.0;      // |g|, m/s^2
     Vec3 up = {0.0, 0.0, 1.0};  // unit vector against gravity
 };
@@ -65,6 +66,26 @@ struct Rest {
     Span<Vec3> impulse;               // (n,) N s, each such body's impulse in the last step
 };
 
+// Contacts found once per step (contacts.h): per listed pair (P,) and a pool of rows (Q,).
+struct ContactCache {
+    Span<int64_t> first;       // (P,) pair k's first row, -1: detected in every pass instead
+    Span<int64_t> count;       // (P,)
+    Span<Vec3> centre_a;       // (P,) m, the pair's bodies' predicted centres at its detection
+    Span<Vec3> centre_b;       // (P,)
+    Span<Vec3> shift_a;        // (P,) m, their predicted displacements then
+    Span<Vec3> shift_b;        // (P,)
+    Span<Vec3> turn_a;         // (P,) rad, their predicted turns then
+    Span<Vec3> turn_b;         // (P,)
+    Span<Vec3> point;          // (Q,) m, world, as found
+    Span<Vec3> normal;         // (Q,) from b to a
+    Span<double> depth;        // (Q,) m, as found
+    Span<Vec3> arm_a;          // (Q,) (point - centre_a) x normal, m
+    Span<Vec3> arm_b;          // (Q,) (point - centre_b) x normal, m
+    int64_t* used;             // rows in use
+    int64_t* needed;           // rows this step asked for (the pool grows to it between steps)
+    int64_t* detected;         // 1 once the step's contacts are found (reset by the broad phase)
+};
+
 // Floats of a body's state compared by sleeping: position 3, orientation 4, velocity 3,
 // angular momentum 3, angular velocity 3, rotation 9.
 constexpr int SNAPSHOT = 25;
@@ -81,6 +102,9 @@ struct WorldStep {
     Span<Vec3> pair_impulse;  // (P,) N s, each pair's impulse on its body a in the current step
     Span<Vec3> start;        // (3 n,) velocity, angular momentum and angular velocity when
                              //        the step's impulse stages began (restored to rerun them)
+    ContactCache contacts;   // the step's contacts, found once
+    Span<const double> body_reach;  // (n,) m, the largest distance of a body's point from its
+                                    //      centre (bounded bodies; 0 for planes)
     ContactSet scratch;      // one pair's contacts (C, the pair contact capacity)
     ContactSet wide;         // one body's contacts with all its frozen supports
     Span<int64_t> pairs_of;  // (n,) in how many listed pairs each body is
@@ -96,17 +120,29 @@ struct WorldStep {
 // one by one).
 constexpr int SUPPORT_CONTACTS = 4;
 
-// The batched buffers behind a ContactSet: B worlds of n bodies and C contacts.
+// The batched buffers behind a ContactSet: B worlds of C contacts.
 struct ContactSetBuffers {
-    Array<Vec3> position, point, normal;
-    Array<Quat> orientation;
-    Array<Mat3> rotation;
+    Array<Vec3> point, normal, centre_a, centre_b;
     Array<double> depth, orient;
     Array<int64_t> group, partner, source;
-    int64_t bodies = 0, contacts = 0;
+    int64_t contacts = 0;
 
-    void allocate(int num_worlds, int64_t num_bodies, int64_t num_contacts);
+    void allocate(int num_worlds, int64_t num_contacts);
     ContactSet rows(int w);
+};
+
+// The batched buffers behind a ContactCache: B worlds of P pairs and Q rows.
+struct ContactCacheBuffers {
+    Array<int64_t> first, count;
+    Array<Vec3> centre_a, centre_b, shift_a, shift_b, turn_a, turn_b;
+    Array<Vec3> point, normal, arm_a, arm_b;
+    Array<double> depth;
+    Array<int64_t> used, needed, detected;
+    int64_t pairs = 0, rows = 0;
+
+    void allocate_pairs(int num_worlds, int64_t num_pairs);
+    void allocate_rows(int num_worlds, int64_t num_rows);
+    ContactCache view(int w);
 };
 
 // The batched buffers behind a Graph: B worlds of n bodies and P pairs.
@@ -139,6 +175,9 @@ public:
 
     // Make room for at least `needed` pairs per world, keeping the pairs listed so far.
     void grow_pairs(int64_t needed);
+
+    // Make the contact pool at least as large as the last step of any world needed.
+    void fit_contact_rows();
 
     // No body of worlds [first, last) sleeps in their next step: what changed cannot be seen
     // in their state (masses, materials, attachments, a reset).
@@ -174,6 +213,8 @@ private:
     Array<double> reach_;
     Array<Vec3> start_;  // (B, 3 n)
     // impulse stages
+    ContactCacheBuffers contacts_;
+    Array<double> body_reach_;
     ContactSetBuffers scratch_, wide_;
     Array<int64_t> pairs_of_;
     GraphBuffers graph_;

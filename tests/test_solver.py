@@ -367,7 +367,7 @@ def sleeping_scene():
 def step_with_interventions(world, steps):
     """Step one at a time: the pad comes down at step 120 and pushes sideways from 180;
     at 250 cube 2 gets a new mass and at 300 a push. Returns every step's state and pair
-    impulses, and how many bodies slept in each step."""
+    impulses, and which bodies slept in each step ((steps, n) bool)."""
     pad, cube2 = world.body_index("pad"), world.body_index("cube2")
     states, sleeping = [], []
     for t in range(steps):
@@ -384,8 +384,8 @@ def step_with_interventions(world, steps):
         impulses = {(int(a), int(b)): j.tobytes()  # by pair: sleeping moves pairs last
                     for (a, b), j in zip(pairs, impulse)}
         states.append([a.tobytes() for a in world.state] + [sorted(impulses.items())])
-        sleeping.append(int(world.sleeping().sum()))
-    return states, sleeping
+        sleeping.append(world.sleeping())
+    return states, np.array(sleeping)
 
 
 def test_sleeping_is_exact():
@@ -401,10 +401,13 @@ def test_sleeping_is_exact():
                                                            400)
     for t, (one, other) in enumerate(zip(states, states_awake)):
         assert one == other, f"step {t}"
-    assert max(sleeping_awake) == 0
-    assert max(sleeping[:60]) == 3  # the three cubes, before the ball arrives
-    assert min(sleeping[300:340]) == 0  # pushed or struck, every cube is awake
-    assert sleeping[-1] >= 1  # and one has come to rest again
+    assert not sleeping_awake.any()
+    cube0, cube1, cube2 = (scene.index(f"cube{k}") for k in range(3))
+    assert sleeping[1:50, [cube0, cube1, cube2]].all()  # at rest before the ball arrives
+    assert not sleeping[56:70, cube0].any()  # struck by the ball
+    assert not sleeping[200:300, cube1].any()  # pushed by the pad
+    assert not sleeping[250, cube2] and not sleeping[300:340, cube2].any()  # new mass, pushed
+    assert sleeping[-1].any()  # and one has come to rest again
 
 
 def test_a_sleeping_cube_reports_its_weight_as_the_support_impulse():

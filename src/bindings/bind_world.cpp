@@ -60,6 +60,7 @@ Settings read_settings(const nb::dict& s) {
     out.sweep = item<bool>(s, "sweep");
     out.broad_phase = item<bool>(s, "broad_phase");
     out.sleep = item<bool>(s, "sleep");
+    out.detect_every_pass = item<bool>(s, "detect_every_pass");
     out.gravity = item<double>(s, "gravity");
     const auto up = item<std::array<double, 3>>(s, "up");
     out.up = {up[0], up[1], up[2]};
