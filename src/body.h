@@ -25,6 +25,10 @@ struct BodyStates {
     Span<Mat3> rotation;
     Span<Vec3> force;
     Span<Vec3> torque;
+    // I(t)^-1 of every body (0 for static and kinematic ones), formed with the broad phase:
+    // orientations do not change until the position update, so the impulse stages apply it
+    // as one matrix product per use
+    Span<Mat3> inverse_inertia;
 };
 
 // What stays fixed while stepping. Per-body parameters may differ between worlds (domain

@@ -32,11 +32,11 @@ double quadratic(const Mat3& k, Vec3 n, Vec3 d) {
 
 }  // namespace
 
-void add_point_mass_matrix(double inverse_mass, const Mat3& rotation, Vec3 inverse_moments,
-                           Vec3 r, Mat3& k) {
+void add_point_mass_matrix(double inverse_mass, const Mat3& inverse_inertia, Vec3 r, Mat3& k) {
+    // r x e_x = (0, rz, -ry), r x e_y = (-rz, 0, rx), r x e_z = (ry, -rx, 0)
+    const Vec3 arms[3] = {{0.0, r.z, -r.y}, {-r.z, 0.0, r.x}, {r.y, -r.x, 0.0}};
     for (int c = 0; c < 3; ++c) {
-        const Vec3 e = {c == 0 ? 1.0 : 0.0, c == 1 ? 1.0 : 0.0, c == 2 ? 1.0 : 0.0};
-        const Vec3 t = cross(apply_inverse_inertia(rotation, inverse_moments, cross(r, e)), r);
+        const Vec3 t = cross(rotate(inverse_inertia, arms[c]), r);
         k.m[0][c] += t.x;
         k.m[1][c] += t.y;
         k.m[2][c] += t.z;

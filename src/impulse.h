@@ -18,9 +18,9 @@
 
 namespace rg {
 
-// k += (1/M) 1 + r*^T I^-1 r*: column c is e_c / M + (I^-1 (r x e_c)) x r.
-void add_point_mass_matrix(double inverse_mass, const Mat3& rotation, Vec3 inverse_moments,
-                           Vec3 r, Mat3& k);
+// k += (1/M) 1 + r*^T I^-1 r*: column c is e_c / M + (I^-1 (r x e_c)) x r; inverse_inertia
+// is I(t)^-1 in world axes.
+void add_point_mass_matrix(double inverse_mass, const Mat3& inverse_inertia, Vec3 r, Mat3& k);
 
 // Impulse (N s) on body 1 that resolves relative velocity v along normal n with restitution e
 // (may be negative in the contact phase: it then only slows the approach) and friction

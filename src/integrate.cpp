@@ -61,6 +61,14 @@ void refresh_rotation_and_angular_velocity(const BodyStates& bodies, const BodyM
     }
 }
 
+void refresh_inverse_inertia(const BodyStates& bodies, const BodyModel& model) {
+    for (int64_t i = 0; i < bodies.position.size; ++i) {
+        bodies.inverse_inertia[i] = model.motion[i] == DYNAMIC
+                                        ? inverse_inertia(bodies.rotation[i], model.inverse_moments[i])
+                                        : Mat3{};
+    }
+}
+
 void update_velocities(const BodyStates& bodies, const BodyModel& model, double dt) {
     const Vec3 g = model.gravity;
     for (int64_t i = 0; i < bodies.position.size; ++i) {
@@ -74,8 +82,7 @@ void update_velocities(const BodyStates& bodies, const BodyModel& model, double 
         v = {v.x + dt * (g.x + f.x * inverse_mass), v.y + dt * (g.y + f.y * inverse_mass),
              v.z + dt * (g.z + f.z * inverse_mass)};
         l = {l.x + dt * tau.x, l.y + dt * tau.y, l.z + dt * tau.z};
-        bodies.angular_velocity[i] =
-            apply_inverse_inertia(bodies.rotation[i], model.inverse_moments[i], l);
+        bodies.angular_velocity[i] = rotate(bodies.inverse_inertia[i], l);
     }
 }
 

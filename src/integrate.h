@@ -27,7 +27,11 @@ int rotation_substeps(double speed, double dt);
 // R(q) for every body and omega = I(t)^-1 L for the dynamic ones (after q or L were set).
 void refresh_rotation_and_angular_velocity(const BodyStates& bodies, const BodyModel& model);
 
-// V += dt (g + F/M), L += dt tau, omega = I(t)^-1 L, for the dynamic bodies.
+// I(t)^-1 = R diag(1/I) R^T of every body into bodies.inverse_inertia (0 unless dynamic).
+void refresh_inverse_inertia(const BodyStates& bodies, const BodyModel& model);
+
+// V += dt (g + F/M), L += dt tau, omega = I(t)^-1 L, for the dynamic bodies (with
+// bodies.inverse_inertia).
 void update_velocities(const BodyStates& bodies, const BodyModel& model, double dt);
 
 // X += dt V; advance q by the rotation of the step; refresh R and omega. Dynamic bodies rotate

@@ -123,6 +123,19 @@ inline Quat rotate_by_angular_velocity(Quat q, Vec3 w, double h) {
     return normalize(multiply(d, q));
 }
 
+// I(t)^-1 = R diag(inverse_moments) R^T (slide 3), formed once where it is applied often.
+inline Mat3 inverse_inertia(const Mat3& r, Vec3 inverse_moments) {
+    Mat3 w;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            w.m[i][j] = r.m[i][0] * inverse_moments.x * r.m[j][0] +
+                        r.m[i][1] * inverse_moments.y * r.m[j][1] +
+                        r.m[i][2] * inverse_moments.z * r.m[j][2];
+        }
+    }
+    return w;
+}
+
 // I(t)^-1 v = R diag(inverse_moments) R^T v (slide 3); inverse_moments 1/kg m^2, 0 on a
 // degenerate axis.
 inline Vec3 apply_inverse_inertia(const Mat3& r, Vec3 inverse_moments, Vec3 v) {

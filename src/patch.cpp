@@ -27,17 +27,10 @@ void tangent_basis(Vec3 n, Vec3& t1, Vec3& t2) {
 }
 
 // big += [[1/M + r*^T W r*, r*^T W], [W r*, W]] for one body, lever r, W = I(t)^-1.
-void add_body_wrench_matrix(double inverse_mass, const Mat3& rotation, Vec3 inverse_moments,
-                            Vec3 r, Matrix6& big) {
-    const Mat3& q = rotation;
-    double w[3][3], wr[3][3];  // W and W r*
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) {
-            w[i][j] = q.m[i][0] * inverse_moments.x * q.m[j][0] +
-                      q.m[i][1] * inverse_moments.y * q.m[j][1] +
-                      q.m[i][2] * inverse_moments.z * q.m[j][2];
-        }
-    }
+void add_body_wrench_matrix(double inverse_mass, const Mat3& inverse_inertia, Vec3 r,
+                            Matrix6& big) {
+    const auto& w = inverse_inertia.m;
+    double wr[3][3];  // W r*
     for (int i = 0; i < 3; ++i) {
         // (W r*) e_j = W (r x e_j): r x e_x = (0, rz, -ry), r x e_y = (-rz, 0, rx), r x e_z = (ry, -rx, 0)
         wr[i][0] = w[i][1] * r.z - w[i][2] * r.y;
@@ -233,7 +226,7 @@ void apply_wrench(const BodyStates& bodies, const BodyModel& model, int i, doubl
     momentum = {momentum.x + sign * (l.x + m.x), momentum.y + sign * (l.y + m.y),
                 momentum.z + sign * (l.z + m.z)};
     bodies.angular_velocity[i] =
-        apply_inverse_inertia(bodies.rotation[i], model.inverse_moments[i], momentum);
+        rotate(bodies.inverse_inertia[i], momentum);
 }
 
 }  // namespace
@@ -261,10 +254,10 @@ void spin_friction(const BodyStates& bodies, const BodyModel& model, int a, int 
     const double spin = (wa.x - wb.x) * n.x + (wa.y - wb.y) * n.y + (wa.z - wb.z) * n.z;
     double compliance = 0.0;
     if (movable.a) {
-        compliance += dot(apply_inverse_inertia(bodies.rotation[a], model.inverse_moments[a], n), n);
+        compliance += dot(rotate(bodies.inverse_inertia[a], n), n);
     }
     if (movable.b) {
-        compliance += dot(apply_inverse_inertia(bodies.rotation[b], model.inverse_moments[b], n), n);
+        compliance += dot(rotate(bodies.inverse_inertia[b], n), n);
     }
     if (compliance <= 0.0) {
         return;
@@ -326,12 +319,10 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
     }
     Matrix6 big = {};
     if (movable.a) {
-        add_body_wrench_matrix(model.inverse_mass[a], bodies.rotation[a], model.inverse_moments[a],
-                               ra, big);
+        add_body_wrench_matrix(model.inverse_mass[a], bodies.inverse_inertia[a], ra, big);
     }
     if (movable.b) {
-        add_body_wrench_matrix(model.inverse_mass[b], bodies.rotation[b], model.inverse_moments[b],
-                               rb, big);
+        add_body_wrench_matrix(model.inverse_mass[b], bodies.inverse_inertia[b], rb, big);
     }
     Matrix6 system;
     double rhs[6], sol[6];

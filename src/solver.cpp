@@ -213,10 +213,10 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
         }
         Mat3 k = {};
         if (movable.a) {
-            add_point_mass_matrix(model.inverse_mass[a], s.rotation[a], model.inverse_moments[a], ra, k);
+            add_point_mass_matrix(model.inverse_mass[a], s.inverse_inertia[a], ra, k);
         }
         if (movable.b) {
-            add_point_mass_matrix(model.inverse_mass[b], s.rotation[b], model.inverse_moments[b], rb, k);
+            add_point_mass_matrix(model.inverse_mass[b], s.inverse_inertia[b], rb, k);
         }
         const Vec3 j = contact_impulse(k, v, n, e, mu);
         apply_pair(s, model, a, b, movable, j, {0.0, 0.0, 0.0}, ra, rb);

@@ -109,6 +109,7 @@ int64_t step_world(WorldStep& w, int64_t steps, int phases, double dt) {
         //    included); held bodies are put at their place first
         if (phases & BROAD_PHASE) {
             place_attached(w.bodies, w.attached);
+            refresh_inverse_inertia(w.bodies, w.model);
             for (int i = 0; i < w.num_bodies(); ++i) {
                 w.lists.reach[i] = 0.0;
             }

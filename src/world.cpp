@@ -132,6 +132,7 @@ StepContext::StepContext(int num_worlds, Geometry geometry, std::vector<int32_t>
     orientation.assign(b * n, {1.0, 0.0, 0.0, 0.0});
     attach_offset_orientation.assign(b * n, {1.0, 0.0, 0.0, 0.0});
     rotation.assign(b * n, {});
+    inverse_inertia.assign(b * n, {});
     motion.assign(body_motion.data(), n);
     inverse_mass.assign(b * n, 0.0);
     friction.assign(b * n, 0.0);
@@ -216,7 +217,8 @@ WorldStep StepContext::world(int w) {
     s.bodies = {world_rows(position, w, n),         world_rows(orientation, w, n),
                 world_rows(velocity, w, n),         world_rows(angular_momentum, w, n),
                 world_rows(angular_velocity, w, n), world_rows(rotation, w, n),
-                world_rows(force, w, n),            world_rows(torque, w, n)};
+                world_rows(force, w, n),            world_rows(torque, w, n),
+                world_rows(inverse_inertia, w, n)};
     const Span<const int32_t> motion_rows = {motion.data(), n};
     const Span<double> mass = world_rows(inverse_mass, w, n);
     const Span<Vec3> moments = world_rows(inverse_moments, w, n);

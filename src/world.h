@@ -187,6 +187,7 @@ public:
     Array<Vec3> position, velocity, angular_momentum, angular_velocity, force, torque;
     Array<Quat> orientation;
     Array<Mat3> rotation;
+    Array<Mat3> inverse_inertia;  // derived in the step (body.h), not seen by Python
     Array<int32_t> motion;  // (n,)
     Array<double> inverse_mass, friction, restitution;
     Array<Vec3> inverse_moments;

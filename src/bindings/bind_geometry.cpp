@@ -75,7 +75,8 @@ void bind_geometry(nb::module_& m) {
            const std::array<double, 3>& inverse_moments, const std::array<double, 3>& r,
            const std::array<std::array<double, 3>, 3>& k) {
             Mat3 out = matrix(k);
-            add_point_mass_matrix(inverse_mass, matrix(rotation), vec(inverse_moments), vec(r), out);
+            add_point_mass_matrix(inverse_mass, inverse_inertia(matrix(rotation), vec(inverse_moments)),
+                                  vec(r), out);
             return rows_of(out);
         },
         nb::arg("inverse_mass"), nb::arg("rotation"), nb::arg("inverse_moments"), nb::arg("r"),
