@@ -40,6 +40,15 @@ class SolverConfig:
         sort-and-sweep from ``collision.SWEEP_MIN_BODIES`` bounded bodies.
     sleep: skip a body resting alone on a static or kinematic one while its step is a fixed
         point (``src/sleep.h``); exact, so off only to measure what it saves.
+    keep_energy: after each rotation update, turn a dynamic body's orientation by the smallest
+        body-frame rotation that gives it back the rotational kinetic energy it had (L is the
+        stored state, so |L| is exact anyway): a free body then keeps |L| and E to round-off
+        at any dt, a projection that keeps the rotation order's accuracy (``src/integrate.h``).
+        Off, the rotation order's energy error shows (what the order studies measure).
+    overlap_correction: after the impulse phases, push apart contacts that overlap by more
+        than 0.1 mm by this fraction of the excess per step (translations only, split by
+        inverse mass: no velocity, orientation or energy changes; ``src/overlap.h``); 0
+        switches it off (GBF as published: overlap once made stays).
     detect_every_pass: run the narrow phase again at the predicted poses in every pass of
         every impulse phase (the original GBF formulation) instead of finding each pair's
         contacts once per step and carrying their separations through the passes
@@ -54,6 +63,8 @@ class SolverConfig:
     sweep: bool | None = None
     sleep: bool = True
     detect_every_pass: bool = False
+    keep_energy: bool = True
+    overlap_correction: float = 0.2
 
     def __post_init__(self):
         for name, low, high in (("collision_passes", 0, 1000), ("contact_passes", 0, 1000),
@@ -63,12 +74,17 @@ class SolverConfig:
                     or not low <= value <= high:
                 raise ValueError(f"SolverConfig.{name} must be an int in [{low}, {high}], "
                                  f"got {value!r}")
+        if isinstance(self.overlap_correction, bool) or not isinstance(
+                self.overlap_correction, (int, float, np.floating)) \
+                or not 0.0 <= self.overlap_correction <= 1.0:
+            raise ValueError("SolverConfig.overlap_correction must be a number in [0, 1], got "
+                             f"{self.overlap_correction!r}")
         if self.rotation_order not in ROTATION_ORDERS:
             raise ValueError(f"SolverConfig.rotation_order must be one of {ROTATION_ORDERS}, "
                              f"got {self.rotation_order!r}")
         if self.sweep not in (None, True, False):
             raise ValueError(f"SolverConfig.sweep must be None, True or False, got {self.sweep!r}")
-        for name in ("sleep", "detect_every_pass"):
+        for name in ("sleep", "detect_every_pass", "keep_energy"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"SolverConfig.{name} must be True or False, got "
                                  f"{getattr(self, name)!r}")

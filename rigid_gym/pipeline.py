@@ -51,6 +51,7 @@ def settings(config: SolverConfig, gravity: np.ndarray, sweep: bool) -> dict:
                 shock_sweeps=config.shock_sweeps, rotation_order=config.rotation_order,
                 sweep=bool(sweep), broad_phase=config.phases()["broad_phase"],
                 sleep=config.sleep, detect_every_pass=config.detect_every_pass,
+                keep_energy=config.keep_energy, overlap_correction=config.overlap_correction,
                 gravity=magnitude, up=tuple(float(u) for u in up))
 
 

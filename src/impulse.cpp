@@ -30,26 +30,15 @@ double quadratic(const Mat3& k, Vec3 n, Vec3 d) {
            n.z * (k.m[2][0] * d.x + k.m[2][1] * d.y + k.m[2][2] * d.z);
 }
 
-}  // namespace
-
-void add_point_mass_matrix(double inverse_mass, const Mat3& inverse_inertia, Vec3 r, Mat3& k) {
-    // r x e_x = (0, rz, -ry), r x e_y = (-rz, 0, rx), r x e_z = (ry, -rx, 0)
-    const Vec3 arms[3] = {{0.0, r.z, -r.y}, {-r.z, 0.0, r.x}, {r.y, -r.x, 0.0}};
-    for (int c = 0; c < 3; ++c) {
-        const Vec3 t = cross(rotate(inverse_inertia, arms[c]), r);
-        k.m[0][c] += t.x;
-        k.m[1][c] += t.y;
-        k.m[2][c] += t.z;
-        k.m[c][c] += inverse_mass;
-    }
+// The frictionless impulse -(1 + e) v_n / (n^T K n) n.
+Vec3 frictionless_impulse(const Mat3& k, Vec3 n, double vn, double e) {
+    const double jn = -(1.0 + e) * vn / quadratic(k, n, n);
+    return scale(jn, n);
 }
 
-Vec3 contact_impulse(const Mat3& k, Vec3 v, Vec3 n, double e, double mu) {
-    const double vn = v.x * n.x + v.y * n.y + v.z * n.z;
-    if (mu == 0.0) {
-        const double jn = -(1.0 + e) * vn / quadratic(k, n, n);
-        return scale(jn, n);
-    }
+// The impulse of Newton's restitution with Coulomb friction (slides 20-23), before the energy
+// check of contact_impulse.
+Vec3 friction_impulse(const Mat3& k, Vec3 v, Vec3 n, double vn, double e, double mu) {
     // static friction: the impulse that leaves -e v_n n
     const Vec3 j = solve3(k, {-v.x - e * vn * n.x, -v.y - e * vn * n.y, -v.z - e * vn * n.z});
     const double jn = j.x * n.x + j.y * n.y + j.z * n.z;
@@ -79,6 +68,38 @@ Vec3 contact_impulse(const Mat3& k, Vec3 v, Vec3 n, double e, double mu) {
     }
     const double jn_sliding = -(1.0 + e) * vn / denom;
     return scale(jn_sliding, d);
+}
+
+}  // namespace
+
+void add_point_mass_matrix(double inverse_mass, const Mat3& inverse_inertia, Vec3 r, Mat3& k) {
+    // r x e_x = (0, rz, -ry), r x e_y = (-rz, 0, rx), r x e_z = (ry, -rx, 0)
+    const Vec3 arms[3] = {{0.0, r.z, -r.y}, {-r.z, 0.0, r.x}, {r.y, -r.x, 0.0}};
+    for (int c = 0; c < 3; ++c) {
+        const Vec3 t = cross(rotate(inverse_inertia, arms[c]), r);
+        k.m[0][c] += t.x;
+        k.m[1][c] += t.y;
+        k.m[2][c] += t.z;
+        k.m[c][c] += inverse_mass;
+    }
+}
+
+Vec3 contact_impulse(const Mat3& k, Vec3 v, Vec3 n, double e, double mu) {
+    const double vn = v.x * n.x + v.y * n.y + v.z * n.z;
+    if (mu == 0.0) {
+        return frictionless_impulse(k, n, vn, e);
+    }
+    const Vec3 j = friction_impulse(k, v, n, vn, e, mu);
+    // the pair's kinetic energy changes by j.v + j.K j / 2: where friction would make that
+    // positive (an eccentric impact, K coupling normal and tangent) the frictionless impulse,
+    // which only loses energy for e <= 1, is used instead
+    const Vec3 kj = {k.m[0][0] * j.x + k.m[0][1] * j.y + k.m[0][2] * j.z,
+                     k.m[1][0] * j.x + k.m[1][1] * j.y + k.m[1][2] * j.z,
+                     k.m[2][0] * j.x + k.m[2][1] * j.y + k.m[2][2] * j.z};
+    if (dot(j, v) + 0.5 * dot(j, kj) > 0.0) {
+        return frictionless_impulse(k, n, vn, e);
+    }
+    return j;
 }
 
 }  // namespace rg

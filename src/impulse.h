@@ -10,6 +10,11 @@
 //                       j_n = -(1 + e) v_n / (n^T K (n - mu T))                  (slides 22-23)
 // with K = K_1 + K_2. A non-positive sliding denominator (large mu with coupling, a
 // Painleve-type case) falls back to the static impulse, which always removes the approach.
+// Newton's restitution with Coulomb friction is not energy-consistent: where K couples normal
+// and tangent (a corner hitting eccentrically) the combined impulse can add kinetic energy
+// (Kane & Levinson's paradox); there the frictionless impulse is used, which at e <= 1 only
+// removes energy (Stronge's energetic coefficient would keep friction; it needs the impact
+// integrated along its compression and restitution, not one impulse).
 // (In the plane of n and T such a denominator implies the static impulse is inside the
 // cone, so the sliding branch is not reached there; tests/test_impulse.py.)
 #pragma once

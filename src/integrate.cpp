@@ -9,6 +9,10 @@ namespace rg {
 namespace {
 
 constexpr double QUARTER_TURN = 0.5 * 3.14159265358979323846;
+// Newton steps that put a rotated body back on its energy (they stop once it is reached).
+constexpr int ENERGY_NEWTON_STEPS = 32;
+// Relative size below which an energy error, or a gradient along the sphere, is round-off.
+constexpr double ENERGY_ROUND_OFF = 1e-15;
 
 // omega_bar for one (sub)step of length h (s): Buss's update of the given order (1, 2 or 3),
 // from R at the start of the step, angular momentum L and torque tau.
@@ -38,6 +42,49 @@ Vec3 effective_angular_velocity(const Mat3& r, Vec3 inverse_moments, Vec3 l, Vec
     const double c6 = h * h / 6.0;
     const double c12 = h * h / 12.0;
     return {b.x + c6 * dd.x + c12 * c.x, b.y + c6 * dd.y + c12 * c.y, b.z + c6 * dd.z + c12 * c.z};
+}
+
+// Rotational kinetic energy L_b . (I^-1 L_b) / 2 of body-frame angular momentum L_b, J.
+double rotational_energy(Vec3 lb, Vec3 inverse_moments) {
+    return 0.5 * (lb.x * lb.x * inverse_moments.x + lb.y * lb.y * inverse_moments.y +
+                  lb.z * lb.z * inverse_moments.z);
+}
+
+// The orientation q (rotation r) turned by the smallest body-frame rotation after which the
+// rotational energy of world angular momentum l is `energy` again (it was before the rotation
+// update; the update keeps |L| exactly, L being the stored state). On the sphere |L_b| =
+// |L| the energy's gradient is g = I^-1 L_b minus its radial part; Newton steps along g find
+// the nearest L_b of that energy (the polhode through the start), and the rotation carrying
+// it onto the current L_b is applied on the body side (a projection method, Hairer, Lubich &
+// Wanner, Geometric Numerical Integration, IV.4: the update keeps its order). A body spinning
+// about a principal axis has g = 0 there and keeps its energy already.
+Quat restore_energy(Quat q, const Mat3& r, Vec3 l, Vec3 inverse_moments, double energy) {
+    const Vec3 start = rotate_inverse(r, l);
+    const double size = length(start);
+    if (size == 0.0) {
+        return q;
+    }
+    Vec3 lb = start;
+    for (int k = 0; k < ENERGY_NEWTON_STEPS; ++k) {
+        const double error = rotational_energy(lb, inverse_moments) - energy;
+        const Vec3 gradient = {lb.x * inverse_moments.x, lb.y * inverse_moments.y,
+                               lb.z * inverse_moments.z};
+        const Vec3 g = sub(gradient, scale(dot(gradient, lb) / (size * size), lb));
+        const double g2 = dot(g, g);
+        // done at round-off; and where g is round-off of the gradient (an isotropic body,
+        // whose energy is the same all over the sphere), there is nothing to move along
+        if (!(std::fabs(error) > ENERGY_ROUND_OFF * energy) ||
+            !(g2 > ENERGY_ROUND_OFF * dot(gradient, gradient))) {
+            break;
+        }
+        lb = add(lb, scale(-error / g2, g));
+        lb = scale(size / length(lb), lb);
+    }
+    // body-frame rotation taking lb onto start: q' = q d with d lb = start
+    const Vec3 a = scale(1.0 / size, lb), b = scale(1.0 / size, start);
+    const Vec3 axis = cross(a, b);
+    const Quat d = normalize({1.0 + dot(a, b), axis.x, axis.y, axis.z});
+    return normalize(multiply(q, d));
 }
 
 }  // namespace
@@ -86,7 +133,8 @@ void update_velocities(const BodyStates& bodies, const BodyModel& model, double 
     }
 }
 
-void update_positions(const BodyStates& bodies, const BodyModel& model, double dt, int order) {
+void update_positions(const BodyStates& bodies, const BodyModel& model, double dt, int order,
+                      bool keep_energy, Span<const int64_t> listed) {
     for (int64_t i = 0; i < bodies.position.size; ++i) {
         if (model.motion[i] == STATIC) {
             continue;
@@ -107,9 +155,14 @@ void update_positions(const BodyStates& bodies, const BodyModel& model, double d
         const double speed = std::sqrt(w.x * w.x + w.y * w.y + w.z * w.z);
         const int substeps = rotation_substeps(speed, dt);
         const double h = dt / substeps;
+        const double energy = rotational_energy(rotate_inverse(r, l), inverse_moments);
         for (int k = 0; k < substeps; ++k) {
             const Vec3 bar = effective_angular_velocity(r, inverse_moments, l, tau, h, order);
             q = rotate_by_angular_velocity(q, bar, h);
+            r = rotation_from_quaternion(q);
+        }
+        if (keep_energy && speed > 0.0 && listed[i] == 0) {
+            q = restore_energy(q, r, l, inverse_moments, energy);
             r = rotation_from_quaternion(q);
         }
         bodies.angular_velocity[i] = apply_inverse_inertia(r, inverse_moments, l);

@@ -36,8 +36,16 @@ void update_velocities(const BodyStates& bodies, const BodyModel& model, double 
 
 // X += dt V; advance q by the rotation of the step; refresh R and omega. Dynamic bodies rotate
 // in sub-steps of at most a quarter turn, each re-evaluating omega from L at the current
-// orientation; kinematic bodies turn at their set angular velocity (exact).
-void update_positions(const BodyStates& bodies, const BodyModel& model, double dt, int order);
+// orientation; kinematic bodies turn at their set angular velocity (exact). With keep_energy
+// a free dynamic body (listed in no pair: listed[i] == 0) is then turned, by the smallest
+// body-frame rotation that does it, back onto the rotational energy it had (L is kept
+// exactly: it is the stored state), so it keeps both |L| and E to round-off whatever dt
+// (SolverConfig.keep_energy). A body in a pair is left to its contacts: turning it after the
+// impulse stages would move its contact points off the poses the impulses were computed for
+// (a tumbling cube's corner dug 28 mm into the ground), and its energy is the impulses' to
+// change anyway.
+void update_positions(const BodyStates& bodies, const BodyModel& model, double dt, int order,
+                      bool keep_energy, Span<const int64_t> listed);
 
 // Put every attached body at its offset from its parent, moving with the parent's velocity
 // and not turning.

@@ -121,7 +121,15 @@ double restitution_for(const WorldStep& w, int a, int b, ImpulseMode mode, doubl
     return mode == CONTACT ? ramp_e : 0.0;
 }
 
-// In how many of the first `pairs` listed pairs each body is.
+// Is the pair (a, b) the only pair of each of its dynamic bodies? (Static and kinematic
+// bodies take no impulse, so the pairs they share carry nothing from one to another.)
+bool alone(const WorldStep& w, int a, int b) {
+    return (w.model.motion[a] != DYNAMIC || w.pairs_of[a] == 1) &&
+           (w.model.motion[b] != DYNAMIC || w.pairs_of[b] == 1);
+}
+
+}  // namespace
+
 void count_pairs_of_bodies(WorldStep& w, int64_t pairs) {
     for (int i = 0; i < w.num_bodies(); ++i) {
         w.pairs_of[i] = 0;
@@ -131,15 +139,6 @@ void count_pairs_of_bodies(WorldStep& w, int64_t pairs) {
         w.pairs_of[w.lists.pair_b[k]] += 1;
     }
 }
-
-// Is the pair (a, b) the only pair of each of its dynamic bodies? (Static and kinematic
-// bodies take no impulse, so the pairs they share carry nothing from one to another.)
-bool alone(const WorldStep& w, int a, int b) {
-    return (w.model.motion[a] != DYNAMIC || w.pairs_of[a] == 1) &&
-           (w.model.motion[b] != DYNAMIC || w.pairs_of[b] == 1);
-}
-
-}  // namespace
 
 Vec3 collision_lookahead(const BodyModel& model, double dt) {
     const Vec3 g = model.gravity;

@@ -44,6 +44,9 @@ void resolve_world_contacts(WorldStep& w, int64_t pairs, double dt, ImpulseMode 
 // The shock-propagation stage over the first `pairs` listed pairs (shock.cpp).
 void propagate_world_shock(WorldStep& w, int64_t pairs, double dt);
 
+// w.pairs_of: in how many of the first `pairs` listed pairs each body is.
+void count_pairs_of_bodies(WorldStep& w, int64_t pairs);
+
 // What the collision stage moves dynamic bodies by when predicting their poses: dt^2 g (m).
 Vec3 collision_lookahead(const BodyModel& model, double dt);
 

@@ -6,6 +6,7 @@
 
 #include "contacts.h"
 #include "integrate.h"
+#include "overlap.h"
 #include "sleep.h"
 #include "solver.h"
 #include "thread_pool.h"
@@ -161,7 +162,12 @@ int64_t step_world(WorldStep& w, int64_t steps, int phases, double dt) {
             if (c.sleep) {
                 keep_rest_impulses(w);
             }
-            update_positions(w.bodies, w.model, dt, c.rotation_order);
+            if (c.overlap_correction > 0.0 && *w.contacts.detected) {
+                correct_overlap(w, *w.rest.awake_pairs, dt, c.overlap_correction);
+            }
+            count_pairs_of_bodies(w, *w.pair_count);
+            update_positions(w.bodies, w.model, dt, c.rotation_order, c.keep_energy,
+                             {w.pairs_of.data, w.pairs_of.size});
             for (int i = 0; i < w.num_bodies(); ++i) {
                 w.bodies.force[i] = {0.0, 0.0, 0.0};
                 w.bodies.torque[i] = {0.0, 0.0, 0.0};

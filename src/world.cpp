@@ -159,6 +159,7 @@ StepContext::StepContext(int num_worlds, Geometry geometry, std::vector<int32_t>
         }
     }
     pairs_of_.assign(b * n, 0);
+    overlap_shift_.assign(b * n, {0.0, 0.0, 0.0});
     awake_pairs_.assign(b, 0);
     partner_.assign(b * n, NONE);
     previous_partner_.assign(b * n, SEVERAL);
@@ -238,6 +239,7 @@ WorldStep StepContext::world(int w) {
     s.scratch = scratch_.rows(w);
     s.wide = wide_.rows(w);
     s.pairs_of = world_rows(pairs_of_, w, n);
+    s.overlap_shift = world_rows(overlap_shift_, w, n);
     s.graph = graph_.rows(w);
     s.rest = {world_rows(asleep, w, n),          &awake_pairs_[w],
               world_rows(partner_, w, n),        world_rows(previous_partner_, w, n),

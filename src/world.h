@@ -29,6 +29,8 @@ struct Settings {
     bool broad_phase = true;   // whether pairs are listed at all
     bool sleep = true;         // sleep.h
     bool detect_every_pass = false;  // contacts.h: the narrow phase in every pass
+    bool keep_energy = true;   // integrate.h: rotation update put back on the body's energy
+    double overlap_correction = 0.2;  // overlap.h: fraction of excess overlap removed per step
     double gravity = 0.0;      // |g|, m/s^2
     Vec3 up = {0.0, 0.0, 1.0};  // unit vector against gravity
 };
@@ -108,6 +110,7 @@ struct WorldStep {
     ContactSet scratch;      // one pair's contacts (C, the pair contact capacity)
     ContactSet wide;         // one body's contacts with all its frozen supports
     Span<int64_t> pairs_of;  // (n,) in how many listed pairs each body is
+    Span<Vec3> overlap_shift;  // (n,) m, overlap.h's position corrections
     Graph graph;
     Rest rest;
 
@@ -218,6 +221,7 @@ private:
     Array<double> body_reach_;
     ContactSetBuffers scratch_, wide_;
     Array<int64_t> pairs_of_;
+    Array<Vec3> overlap_shift_;
     GraphBuffers graph_;
     // sleeping
     Array<int64_t> awake_pairs_, partner_, previous_partner_;
