@@ -184,7 +184,7 @@ def sweep_mass_properties(resolutions, samples, repeats: int) -> list[SampledCur
     curves = []
     for name, shape in MASS_SHAPES.items():
         exact = mass_properties(shape, DENSITY)
-        mass_properties_grid(shape, DENSITY, 4)  # compiles or loads the kernels
+        mass_properties_grid(shape, DENSITY, 4)  # warm-up outside the timings
         for method, counts, estimate, seeds in (
                 ("grid", resolutions, lambda n, s: mass_properties_grid(shape, DENSITY, n), [0]),
                 ("Monte Carlo", samples,

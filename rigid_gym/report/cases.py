@@ -20,9 +20,12 @@ from rigid_gym import analytic
 from rigid_gym.report import scenes
 from rigid_gym.report.scenes import G
 
-PASS_SETTINGS = {"default": {}, "2 contact passes": {"contact_passes": 2}}
+PASS_SETTINGS = {"default": {}, "2 contact passes": {"contact_passes": 2},
+                 "narrow phase every pass": {"detect_every_pass": True}}
 BOUNCE_SETTINGS = {**PASS_SETTINGS, "1 collision pass": {"collision_passes": 1}}
-ROTATION_SETTINGS = {f"rotation order {k}": {"rotation_order": k} for k in (1, 2, 3)}
+ROTATION_SETTINGS = {**{f"rotation order {k}": {"rotation_order": k} for k in (1, 2, 3)},
+                     "rotation order 2, energy not kept": {"rotation_order": 2,
+                                                            "keep_energy": False}}
 
 
 @dataclass(frozen=True)

@@ -402,54 +402,6 @@ def run_all(scale: float) -> list[StiffResult]:
     return [result for case in CASES for result in case(scale)]
 
 
-KNOWN_CAUSES = {
-    "fast_spinner": (
-        "the rotation update is explicit: it follows the wobble of a body spinning off a "
-        "principal axis (here ~300 rad/s, the spin rate) only while that rate times dt is "
-        "small, and its error grows the energy (L drifts towards the minor axis, E -> 3 E0 "
-        "for I = (1, 2, 3)). The quarter-turn sub-steps bound the rotation angle per step, "
-        "not this error. Measured (E/E0 - 1 after 1 s, 300 rad/s, 4 deg off axis): order "
-        "1: +2.0 at every dt down to 1/1000; order 2: +2.0 at 1/60 and 1/240, +0.9 at 1/1000; "
-        "order 3: +0.25 at 1/60 and 1/240, -9e-4 at 1/1000. Spin exactly about a principal "
-        "axis is exact at any dt. A fix needs an energy-conserving update (e.g. a splitting "
-        "or implicit midpoint method) or sub-steps bounded by the wobble rate."),
-    "restitution_1": (
-        "Newton's restitution law combined with Coulomb friction in one impulse "
-        "(`kernels/impulse.contact_impulse`) is not energy-consistent when a corner hits "
-        "eccentrically (K couples normal and tangent): the energy change "
-        "j.(v + v')/2 is positive for 27% of random cube-corner impacts at e = 1 and mu = "
-        "0.5, in both the sticking branch j = K^-1(-v - e v_n n) and the sliding branch "
-        "(gains up to 1.1 x the kinetic energy; the Kane-Levinson paradox). Frictionless "
-        "impacts at e = 1 conserve energy exactly (the ball passes). A fix: Stronge's "
-        "energetic restitution, or clamp an impulse that would add energy to the frictionless "
-        "one; not done here because it changes every bouncing contact with friction."),
-    "thin_rod": (
-        "overlap that no phase removes. After its lower end lands, the rod pivots on it for "
-        "~60 steps at omega ~ 2 rad/s; the solver makes the end's normal velocity exactly 0, "
-        "but the position update turns the rod about its centre of mass, so the end moves on "
-        "an arc and sinks by about omega^2 r dt^2 / 2 = 1.7e-5 m per step (r = 0.49 m; "
-        "measured 1.5e-5 m per step). The contact phase then sees no approach (v_n = 0) and "
-        "GBF has no position correction, so the 1.2 mm (dt = 1/240; 0.23 mm at 1/960: first "
-        "order in dt) stays for good and the resting rod is tilted by it. A fix: let the "
-        "contact phase aim for a small separating velocity proportional to the predicted "
-        "overlap (a Baumgarte-style bias), or project positions after the step."),
-    "pile": (
-        "Overlap is made while bodies land on each other, because the "
-        "contact phase has not converged after its 10 passes (100-body pile, first 100 steps: "
-        "deepest 4.9 mm with 10 passes, 2.6 mm with 40; 8 shock sweeps instead of 2 change "
-        "nothing, 5.1 mm), and once made it is never removed (as for the thin rod): over 0.4 s "
-        "the deepest is 4.9 mm at dt = 1/240 and 0.8 mm at 1/960. On the 1000-body pile (measured at 1 s) 76 contact points are deeper than "
-        "2 mm; the deepest, 19.5 mm, is a 5 cm box that the pile presses sideways into a "
-        "static wall, sinking ~0.2 mm per step from 0.6 s on; pairs of moving bodies reach "
-        "9.7 mm (two capsules). The box sinks into the wall because, within one level, shock "
-        "propagation resolves each body against its frozen supports (the wall, the ground) "
-        "and then the pairs inside the level, and after its 2 sweeps the last pairwise impulse "
-        "leaves the box moving into the wall. Reproduced with two 5 cm boxes on the floor "
-        "beside a wall, the outer one pushed by 5 N (tests/test_solver.py): the inner one sinks "
-        "3.1 mm in 1 s with 2 sweeps, not at all with 20 sweeps or with 40 contact passes; at "
-        "50 N it goes through the 10 cm wall. A fix: end each sweep with the frozen supports, "
-        "or iterate the level to convergence. "
-        "(The pile used to start with 4.6 mm overlaps, its layers 7 cm apart; now 9 cm.)"),
-}
+KNOWN_CAUSES: dict[str, str] = {}
 """Diagnosed causes of cases that fail, shown in the report next to the failure (a case that
 fails without an entry is reported as not yet diagnosed)."""
