@@ -13,6 +13,7 @@ Conventions (those of panda-gym and Gymnasium-Robotics Fetch, so their HER setti
 from __future__ import annotations
 
 import os
+import reprlib
 import sys
 
 import numpy as np
@@ -93,11 +94,6 @@ class RigidGymEnv(gym.Env):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"{type(self).__name__}: render_mode must be None or one of "
                              f"{self.metadata['render_modes']}, got {render_mode!r}")
-        if render_mode == "human" and not _display_available():
-            raise ValueError(f"{type(self).__name__}: render_mode='human' opens the rerun viewer "
-                             "and needs a display (none found: DISPLAY and WAYLAND_DISPLAY are "
-                             "unset); use render_mode='rgb_array', or record episodes with "
-                             "rigid_gym.recording and replay them where a display exists")
         if reward_type not in ("sparse", "dense"):
             raise ValueError(f"{type(self).__name__}: reward_type must be 'sparse' or 'dense', "
                              f"got {reward_type!r}")
@@ -128,6 +124,9 @@ class RigidGymEnv(gym.Env):
         self.gripper: SuctionGripper | None = None
         self.goal = np.zeros(self.goal_size)
         self._renderer = None
+        self._viewer: bool | None = None
+        """render_mode='human': whether frames go to the rerun viewer (a display was found at
+        the first render), None until then."""
 
     # -- the Gymnasium API -------------------------------------------------------------------
 
@@ -198,7 +197,7 @@ class RigidGymEnv(gym.Env):
         """The first half of ``step``: check ``action`` and command the gripper with it."""
         if self.world is None:
             raise ResetNeeded(f"{type(self).__name__}.step: call reset() before step()")
-        action = np.asarray(action, dtype=np.float64)
+        action = real_array(action, f"{type(self).__name__}.step: action", self.action_space)
         if action.shape != self.action_space.shape:
             raise ValueError(f"{type(self).__name__}.step: action must have shape "
                              f"{self.action_space.shape}, got {action.shape}")
@@ -238,11 +237,20 @@ class RigidGymEnv(gym.Env):
             return None
         if self.world is None:
             raise ResetNeeded(f"{type(self).__name__}.render: call reset() before render()")
-        frame = self._render_frame()
         if self.render_mode == "human":
-            _show_in_viewer(frame)
+            if self._viewer is None:
+                self._viewer = _display_available()
+                if not self._viewer:
+                    gym.logger.warn(
+                        f"{type(self).__name__}.render: render_mode='human' shows frames in the "
+                        "rerun viewer, which needs a display, and none was found (DISPLAY and "
+                        "WAYLAND_DISPLAY are unset): frames are not shown. Use "
+                        "render_mode='rgb_array', or record episodes with rigid_gym.recording "
+                        "and replay them where a display exists")
+            if self._viewer:
+                _show_in_viewer(self._render_frame())
             return None
-        return frame
+        return self._render_frame()
 
     def close(self):
         self._renderer = None
@@ -341,6 +349,24 @@ def observations_from(envs, vectors: np.ndarray, achieved: np.ndarray, goals: np
         "achieved_goal": achieved.astype(np.float32),
         "desired_goal": goals.astype(np.float32),
     }
+
+
+def real_array(values, what: str, space: spaces.Box) -> np.ndarray:
+    """``values`` as a float64 array, if they are a real numeric array (or nested sequence) of
+    bool, int or float of any width; otherwise a ValueError naming ``what`` (the env and the
+    argument) and the expected ``space``. Strings (even "0.5"), complex numbers, objects and
+    dicts are refused: numpy would parse the first, drop the imaginary part of the second and
+    fail with a bare message on the rest. Shape and finiteness are the caller's to check."""
+    try:
+        array = np.asarray(values)
+    except (TypeError, ValueError):  # ragged nesting, or an object numpy cannot take
+        array = None
+    if array is None or array.dtype.kind not in "biuf":
+        got = (f"an array of dtype {values.dtype}" if isinstance(values, np.ndarray)
+               else f"{type(values).__name__} {reprlib.repr(values)}")
+        raise ValueError(f"{what} must be a real numeric array (bool, int or float) in "
+                         f"{space}, got {got}")
+    return array.astype(np.float64, copy=False)
 
 
 def _randomization_ranges(randomize, where: str) -> dict:

@@ -26,6 +26,7 @@ from rigid_gym.envs.base import (
     RigidGymEnv,
     observations_from,
     observe,
+    real_array,
 )
 from rigid_gym.envs.effector import command_all
 from rigid_gym.envs.push import PushEnv
@@ -98,7 +99,7 @@ class RigidGymVectorEnv(VectorEnv):
                 for key in self.single_observation_space.spaces}, infos
 
     def step(self, actions):
-        actions = np.asarray(actions, dtype=np.float64)
+        actions = real_array(actions, f"{type(self).__name__}.step: actions", self.action_space)
         expected = self.action_space.shape
         if actions.shape != expected:
             raise ValueError(f"{type(self).__name__}.step: actions must have shape {expected}, "

@@ -51,9 +51,12 @@ file's rows (~30 bytes per moving body and step) until the file ends.
 **Files are complete** once the writer has written what it was handed: at the latest when
 ``close()`` returns, when ``step`` or ``reset`` raises (what was buffered is written, then the
 exception propagates), and when the process exits (an ``atexit`` hook hands over any open
-file and waits for the writer); a process killed outright loses only the rows it had not
-handed over (a writer killed outright loses the files it had not finished). Files of
-finished episodes are written in the background: ``sync()`` waits for them. Nothing is made
+file and waits for the writer); a process killed outright, or stopped by Ctrl-C, loses only
+the rows it had not handed over (a writer killed outright loses the files it had not
+finished; Ctrl-C does not reach it). Files of finished episodes are written in the
+background: ``sync()`` waits for them. A file the writer cannot write (an unwritable folder,
+a name too long) is reported by its own recorder: ``sync()`` and ``close()`` raise its
+OSError, naming the file; the other files, and later ones, are written. Nothing is made
 until an episode starts, so the wrappers can be built inside SubprocVecEnv workers (each
 worker has its own writer and files; the default run name contains the process id).
 ``RERUN=off`` in the environment turns recording off: nothing is written and nothing fails.
@@ -106,7 +109,8 @@ class RecordRerun(gym.Wrapper):
     chunk_steps: steps buffered before they are sent (>= 1).
 
     ``paths`` lists the files started so far; files of finished episodes are written in the
-    background (``sync`` waits for them, ``close`` does too).
+    background (``sync`` waits for them, ``close`` does too, and both raise the error of a
+    file that could not be written).
     """
 
     def __init__(self, env: gym.Env, folder: str | os.PathLike = RECORDINGS,
@@ -152,13 +156,19 @@ class RecordRerun(gym.Wrapper):
         return observation, reward, terminated, truncated, info
 
     def close(self):
-        self._end_episode(wait=True)
-        super().close()
+        """Complete the open episode's file and close the env; returns once every file is
+        written, raising as ``sync`` does."""
+        try:
+            self._end_episode()
+            self.sync()
+        finally:
+            super().close()
 
     def sync(self) -> None:
-        """Wait until the files of finished episodes are written."""
+        """Wait until the files of finished episodes are written. Raises the writer's error
+        (an OSError naming the file) for one of them that could not be, each error once."""
         if self.paths:
-            writer().sync()
+            writer().sync({str(path) for path in self.paths})
 
     def _begin_episode(self) -> None:
         task = self.env.unwrapped
@@ -195,10 +205,14 @@ class RecordRerun(gym.Wrapper):
                                bool(info.get("is_success", False)))
 
     def _end_episode(self, wait: bool = False) -> None:
-        """Hand the episode's file over to the writer; ``wait`` until it is written."""
+        """Hand the episode's file over to the writer; ``wait`` until it is written. Waiting
+        raises no file's error (it runs while an exception propagates, which goes first):
+        ``sync`` and ``close`` do."""
         recording, self._recording = self._recording, None
         if recording is not None:
-            recording.close(wait)
+            recording.close()
+        if wait and self.paths:
+            writer().sync()
 
 
 def blueprint_of(path: str | os.PathLike) -> Path | None:
@@ -273,16 +287,22 @@ class WorldRecorder:
 
     def close(self) -> None:
         """Write what is buffered and complete the file; returns once it is written
-        (idempotent)."""
-        if self._recording is not None:
-            self._recording.close(wait=True)
-        self._state = "closed"
+        (idempotent). Raises the writer's error (an OSError naming the file) if it could not
+        be written."""
+        self._close(errors=True)
 
     def __enter__(self) -> WorldRecorder:
         return self
 
-    def __exit__(self, *exc_info) -> None:
-        self.close()
+    def __exit__(self, exc_type, exc, traceback) -> None:
+        # an exception from the block goes first; the file's error, if any, is then printed
+        # when the writer stops
+        self._close(errors=exc_type is None)
+
+    def _close(self, errors: bool) -> None:
+        self._state = "closed"
+        if self._recording is not None:
+            self._recording.close(wait=True, errors=errors)
 
 
 # -- one file -----------------------------------------------------------------------------------
@@ -369,9 +389,9 @@ class _Recording:
         self._send_rows()
         self.files.flush()
 
-    def close(self, wait: bool = False) -> None:
+    def close(self, wait: bool = False, errors: bool = True) -> None:
         """Hand the remaining rows and the file's end to the writer; ``wait`` until it is
-        written. Idempotent."""
+        written, raising the writer's error if it could not be (``errors``). Idempotent."""
         if not self.closed:
             self.closed = True
             atexit.unregister(self.close)
@@ -380,7 +400,7 @@ class _Recording:
             finally:
                 self.files.send("close", self.path, flush=True)
         if wait:
-            self.files.sync()
+            self.files.sync({self.path} if errors else ())
 
     def _send_rows(self) -> None:
         if len(self.rows):

@@ -28,14 +28,21 @@ Messages are tuples, handed over in pickled lists on the writer's standard input
 - ``("contacts", path, steps (T,), times (T,) s, points, origins, vectors)``: rows.
 - ``("close", path)``: write the file (until then its chunks are held in memory: ~40 bytes
   per moving body and row).
-- ``("sync",)``: answered on standard output once everything sent before it is written.
+- ``("sync",)``: answered on standard output, once everything sent before it is written, with
+  the pickled list of the files that could not be written since the last answer,
+  ``(path, errno or None, reason, filename or None)`` each (``_failure_error``).
 - ``("stop",)``, or the end of the input (its client's process ended, however it ended):
   complete every open file and exit.
 
-The writer runs at a lower priority (``NICENESS``) and ignores Ctrl-C, which a terminal sends
-to the whole process group: it finishes the files it was given when its client stops it or
-dies. Errors end it with a traceback on the
-shared standard error; the client then raises at its next message.
+A file that cannot be written (an unwritable folder, a name too long, a full disk) is dropped,
+its later messages ignored, and its error kept for the next sync's answer: the other files are
+written, and the client raises the error from the recorder of that file (``Writer.sync``).
+Errors no sync collected are printed on the shared standard error as the writer exits.
+
+The writer runs at a lower priority (``NICENESS``) in a process group of its own, so Ctrl-C,
+which a terminal sends to the foreground process group, never reaches it, not even while it
+is still importing (~1 s after the first file); it finishes the files it was given when its
+client stops it or dies.
 """
 
 from __future__ import annotations
@@ -65,14 +72,14 @@ from rigid_gym.render import _body_colors, _corner_normals, tessellate
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
 
-SYNCED = b"rigid_gym.recording_writer: synced\n"
-"""The writer's answer to a sync."""
 PIPE_BYTES = 1 << 20
 """bytes the pipe to the writer holds (Linux's default is 64 KiB): ~70 files of 50-step
 episodes."""
 NICENESS = 10
 """The writer runs at a lower priority: where it competes with the env for a core, the env
 goes first, and the writer catches up while the env waits (on a full pipe, or a sync)."""
+EXIT_WAIT = 10.0
+"""s to wait for the exit code of a writer whose pipes have closed (it is exiting)."""
 PLANE_HALF_SIZE = 1.0
 """m: a Plane (the ground) is drawn as the square |x|, |y| <= this."""
 RECURRING_CACHE = 64
@@ -84,15 +91,22 @@ FORCE_COLOR = (250, 150, 30)
 # -- the client ---------------------------------------------------------------------------------
 
 class Writer:
-    """A writer process and the pipe to it (``writer()`` gives the process's own)."""
+    """A writer process and the pipe to it (``writer()`` gives the process's own).
+
+    ``failures``: {path: (errno, reason, filename)} of the files the writer reported it could
+    not write, until their recorder raises the error (``sync``)."""
 
     def __init__(self):
         self.owner = os.getpid()
+        # process_group=0: a group of its own, which the terminal's Ctrl-C (sent to the
+        # foreground group) does not reach; the writer ends when its input does (POSIX only)
         self.process = subprocess.Popen([sys.executable, "-m", "rigid_gym.recording_writer"],
-                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE)
+                                        stdin=subprocess.PIPE, stdout=subprocess.PIPE,
+                                        process_group=0)
         _widen(self.process.stdin)
         self.layouts = 0
         self.pending: list[tuple] = []
+        self.failures: dict[str, tuple] = {}
         self.stopped = False
         atexit.register(self.stop)
 
@@ -120,18 +134,25 @@ class Writer:
         except (BrokenPipeError, ValueError) as error:  # ValueError: the pipe was closed
             raise RuntimeError(self._ended()) from error
 
-    def sync(self) -> None:
-        """Wait until every file sent so far is written."""
+    def sync(self, paths=frozenset()) -> None:
+        """Wait until every file sent so far is written, then raise the writer's error for
+        the first of ``paths`` (a container of str) that could not be written (an OSError
+        with the OS's errno where there is one, else a RuntimeError; each error once). The
+        errors of other files are kept for their recorders."""
         self.send("sync", flush=True)
-        while True:
-            line = self.process.stdout.readline()
-            if line == SYNCED:
-                return
-            if not line:
-                raise RuntimeError(self._ended())
+        try:
+            failures = pickle.load(self.process.stdout)
+        except EOFError:
+            raise RuntimeError(self._ended()) from None
+        for path, *failure in failures:
+            self.failures[path] = tuple(failure)
+        failed = next((path for path in self.failures if path in paths), None)
+        if failed is not None:
+            raise _failure_error(failed, *self.failures.pop(failed))
 
     def stop(self) -> None:
-        """Let the writer complete every file and exit; wait for it (idempotent)."""
+        """Let the writer complete every file and exit; wait for it (idempotent). Errors that
+        no recorder raised are printed on standard error."""
         atexit.unregister(self.stop)
         if os.getpid() != self.owner:  # a forked child's copy: the parent's writer
             return
@@ -143,10 +164,39 @@ class Writer:
             except RuntimeError:
                 pass  # it ended already: its error is on standard error
         self.process.wait()
+        for pipe in (self.process.stdin, self.process.stdout):
+            try:
+                pipe.close()
+            except BrokenPipeError:  # a dead writer's unsent bytes
+                pass
+        for path, failure in self.failures.items():
+            _report(_failure_error(path, *failure))
+        self.failures.clear()
 
     def _ended(self) -> str:
+        try:  # its pipes closed as it exited: the exit code follows
+            code = self.process.wait(EXIT_WAIT)
+        except subprocess.TimeoutExpired:
+            code = None
         return (f"the rerun writer process (rigid_gym.recording_writer) has ended (exit code "
-                f"{self.process.poll()}); its error, if any, is above on standard error")
+                f"{code}); the files it had not written are lost; its error, if any, is above "
+                f"on standard error")
+
+
+def _failure_error(path: str, errno: int | None, reason: str,
+                  filename: str | None) -> Exception:
+    """The error of the file ``path`` that the writer could not write: an OSError with
+    ``errno`` and the OS's ``reason`` (and the ``filename`` that failed, when not the file
+    itself: its folder), or, without an errno, a RuntimeError with ``reason``."""
+    what = f"the rerun writer could not write {path}: {reason}"
+    if errno is None:
+        return RuntimeError(what)
+    return OSError(errno, what, None if filename == path else filename)
+
+
+def _report(error: Exception) -> None:
+    """Print a file's error on standard error, where no recorder is left to raise it."""
+    print(f"rigid_gym.recording_writer: {error}", file=sys.stderr, flush=True)
 
 
 def _widen(pipe) -> None:
@@ -178,33 +228,67 @@ def writer() -> Writer:
 
 def main() -> None:
     """Write files from the messages on standard input until ``stop`` or its end."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # one sent to this process by its id
     os.nice(NICENESS)
     answers = os.fdopen(os.dup(1), "wb")  # standard output is for answers only:
     os.dup2(2, 1)  # what anything else prints goes to standard error
     layouts: dict[int, _Layout] = {}
-    files: dict[str, _File] = {}
+    files: dict[str, _File | None] = {}  # None: a file that failed; its messages are dropped
+    failures: list[tuple] = []  # (path, errno, reason, filename), until a sync answers them
     try:
         for kind, *args in _messages(sys.stdin.buffer):
             if kind == "stop":
                 break
             if kind == "sync":
-                answers.write(SYNCED)
+                pickle.dump(failures, answers)
                 answers.flush()
+                failures = []
             elif kind == "layout":
                 key, scene, application_id, blueprint = args
                 layouts[key] = _Layout(scene, application_id, blueprint)
-            elif kind == "open":
-                path, recording_id, key, statics, contacts = args
-                files[path] = _File(Path(path), recording_id, layouts[key], statics, contacts)
-            elif kind == "close":
-                files.pop(args[0]).close()
             else:
-                path, *values = args
-                getattr(files[path], kind)(*values)
+                path = args[0]
+                try:
+                    _handle(files, layouts, kind, args)
+                except Exception as error:  # this file's; the others go on
+                    if kind != "close":
+                        files[path] = None
+                    failures.append(_failure(path, error))
     finally:
-        for file in files.values():
-            file.close()
+        for path, file in files.items():
+            if file is not None:
+                try:
+                    file.close()
+                except Exception as error:
+                    failures.append(_failure(path, error))
+        for failure in failures:  # no sync is left to answer them
+            _report(_failure_error(*failure))
+
+
+def _handle(files: dict, layouts: dict, kind: str, args: list) -> None:
+    """Apply a message about one file (``open``, ``close`` or one of ``_File``'s kinds) to
+    ``files`` ({path: _File, or None for a file that failed})."""
+    if kind == "open":
+        path, recording_id, key, statics, contacts = args
+        files[path] = _File(Path(path), recording_id, layouts[key], statics, contacts)
+        return
+    path, *values = args
+    file = files.pop(path) if kind == "close" else files[path]
+    if file is None:
+        return
+    if kind == "close":
+        file.close()
+    else:
+        getattr(file, kind)(*values)
+
+
+def _failure(path: str, error: Exception) -> tuple:
+    """What the client needs to raise ``error`` of the file ``path`` (``_failure_error``'s
+    arguments)."""
+    if isinstance(error, OSError) and error.errno is not None:
+        filename = None if error.filename is None else str(error.filename)
+        return path, error.errno, error.strerror, filename
+    return path, None, f"{type(error).__name__}: {error}", None
 
 
 def _messages(source):
@@ -280,7 +364,6 @@ class _File:
     def __init__(self, path: Path, recording_id: str, layout: _Layout, statics: dict,
                  contacts: bool):
         self.path, self.recording_id, self.layout = path, recording_id, layout
-        layout.blueprint_beside(path)
         self.chunks = [_static_chunk("__properties", rr.archetypes.RecordingInfo(
                            start_time=time.time_ns(), name=recording_id)), *layout.scene]
         for body, pose in statics.items():
@@ -352,12 +435,15 @@ class _File:
 
     def close(self) -> None:
         """Write the file (its chunks, then rerun's footer), making its folder again if it
-        has gone since the file was opened."""
+        has gone since the file was opened, then the layout beside it. Raises an OSError
+        where the file cannot be made."""
         self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.path.open("wb").close()  # rerun's own error would name neither the file nor errno
         ChunkStore.from_chunks(self.chunks).write_rrd(
             self.path, application_id=self.layout.application_id,
             recording_id=self.recording_id)
         self.chunks = []
+        self.layout.blueprint_beside(self.path)
 
 
 def _static_chunk(entity: str, *archetypes) -> Chunk:

@@ -1,6 +1,11 @@
 """Recordings: what the .rrd file holds equals what the env or World did, files are complete
-after an episode, an exception, close() and in SubprocVecEnv workers, and bad input fails."""
+after an episode, an exception, close(), Ctrl-C, a killed process and in SubprocVecEnv
+workers, a file that cannot be written fails alone, and bad input fails."""
 
+import errno
+import os
+import shutil
+import signal
 import subprocess
 import sys
 import textwrap
@@ -89,6 +94,12 @@ def views_beside(path) -> dict:
 
 def xyzw(orientation: np.ndarray) -> np.ndarray:
     return np.asarray(orientation)[..., [1, 2, 3, 0]]
+
+
+def verified(path) -> bool:
+    """Whether ``path`` is a complete rerun file (``rerun rrd verify``: CRCs, footer)."""
+    return subprocess.run([find_rerun(), "rrd", "verify", str(path)],
+                          capture_output=True).returncode == 0
 
 
 # -- an env episode -------------------------------------------------------------------------------
@@ -217,9 +228,21 @@ def test_an_exception_in_step_leaves_a_complete_file_with_the_steps_so_far(tmp_p
         env.step(np.array([np.nan, 0.0, 0.0]))
     step, _ = temporal(env.paths[0], "/world/bodies/cube0", "Transform3D:translation")
     assert step.tolist() == list(range(7))
-    verify = subprocess.run([find_rerun(), "rrd", "verify", str(env.paths[0])],
-                            capture_output=True)
-    assert verify.returncode == 0, verify.stderr
+    assert verified(env.paths[0])
+
+
+def test_close_after_the_episode_ended_returns_once_its_file_is_written(tmp_path):
+    """The episode's end handed the file over: close() has no episode open, and still waits."""
+    env = RecordRerun(gym.make("rigid_gym/Push-v0", max_episode_steps=5), tmp_path,
+                      episode_trigger=lambda k: True, run="ended")
+    env.reset(seed=0)
+    for _ in range(5):
+        truncated = env.step(env.action_space.sample())[3]
+    assert truncated
+    env.close()
+    assert verified(env.paths[0])
+    step, _ = temporal(env.paths[0], "/world/bodies/cube0", "Transform3D:translation")
+    assert step.tolist() == list(range(6))
 
 
 def test_a_process_that_dies_of_an_exception_leaves_a_complete_file(tmp_path):
@@ -242,10 +265,10 @@ def test_a_process_that_dies_of_an_exception_leaves_a_complete_file(tmp_path):
 
 
 def test_a_process_killed_outright_still_gets_its_finished_episodes_written(tmp_path):
-    """os._exit skips atexit, as a killed worker does: the writer, left alone, completes the
-    files it was handed."""
+    """SIGKILL runs no atexit hook: the writer, left alone, completes the files it was handed
+    (the finished episodes'; the open one's rows had not been handed over)."""
     script = textwrap.dedent(f"""
-        import os
+        import time
         import gymnasium as gym
         import rigid_gym
         from rigid_gym.recording import RecordRerun
@@ -257,19 +280,53 @@ def test_a_process_killed_outright_still_gets_its_finished_episodes_written(tmp_
                 env.step(env.action_space.sample())
         env.reset(seed=2)
         env.step(env.action_space.sample())
-        os._exit(1)
+        print("episode 2 under way", flush=True)
+        time.sleep(60)
     """)
-    subprocess.run([sys.executable, "-c", script], check=False)
+    with subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE,
+                          text=True) as process:
+        assert process.stdout.readline() == "episode 2 under way\n"
+        process.kill()
     folder = tmp_path / "rigid_gym-Throw-v0"
     for episode in range(2):
         path = folder / f"killed-episode-{episode}.rrd"
         for _ in range(100):  # the writer outlives the process: wait for it to finish
-            if subprocess.run([find_rerun(), "rrd", "verify", str(path)],
-                              capture_output=True).returncode == 0:
+            if verified(path):
                 break
             time.sleep(0.1)
         step, _ = temporal(path, "/world/bodies/cube0", "Transform3D:translation")
         assert step.tolist() == [0, 1, 2, 3]
+
+
+def test_ctrl_c_right_after_the_first_recorded_reset_loses_no_finished_episode(tmp_path):
+    """SIGINT to the whole process group, as a terminal sends Ctrl-C, 0.1 s after the first
+    recorded reset, while the writer process is still importing: it does not reach the
+    writer, and every episode the env finished is written when the env's process has
+    exited."""
+    script = textwrap.dedent(f"""
+        import gymnasium as gym
+        import rigid_gym
+        from rigid_gym.recording import RecordRerun
+        env = RecordRerun(gym.make("rigid_gym/Throw-v0", max_episode_steps=3),
+                          {str(tmp_path)!r}, episode_trigger=lambda k: True, run="interrupted")
+        env.reset(seed=0)
+        print("reset", flush=True)
+        while True:
+            for _ in range(3):
+                env.step(env.action_space.sample())
+            print(env.paths[-1], flush=True)  # finished
+            env.reset()
+    """)
+    process = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE,
+                               text=True, start_new_session=True)  # a group of its own
+    assert process.stdout.readline() == "reset\n"
+    time.sleep(0.1)
+    os.killpg(process.pid, signal.SIGINT)
+    finished = process.communicate(timeout=120)[0].split()
+    assert process.returncode != 0  # interrupted
+    assert finished
+    for path in finished:
+        assert verified(path), path
 
 
 def test_a_writer_that_died_is_reported_not_ignored(tmp_path):
@@ -277,11 +334,12 @@ def test_a_writer_that_died_is_reported_not_ignored(tmp_path):
 
     env = RecordRerun(gym.make("rigid_gym/Throw-v0", max_episode_steps=2), tmp_path,
                       episode_trigger=lambda k: True, run="w")
-    run_episode(env, seed=0)
+    run_episode(env, seed=0)  # synced: written before the writer is killed
     dead = writer()
     dead.process.kill()
     dead.process.wait()
-    with pytest.raises(RuntimeError, match="rerun writer process .* has ended"):
+    assert verified(env.paths[0])
+    with pytest.raises(RuntimeError, match=r"rerun writer process .* has ended \(exit code -9\)"):
         run_episode(env, seed=1)
     with pytest.raises(RuntimeError, match="rerun writer process .* has ended"):
         writer()  # a new recorder too: files handed to the dead writer may be lost
@@ -291,6 +349,91 @@ def test_a_writer_that_died_is_reported_not_ignored(tmp_path):
     run_episode(fresh, seed=0)
     assert writer() is not dead
     assert (tmp_path / "rigid_gym-Throw-v0" / "fresh-episode-0.rrd").exists()
+
+
+@pytest.fixture
+def unwritable_folder(tmp_path):
+    """A Push recorder's folder (``<folder>/rigid_gym-Push-v0``) in which no file can be made:
+    read-only by its mode, or for root (whom modes do not stop) immutable (``chattr +i``); the
+    test is skipped where neither holds."""
+    folder = tmp_path / "unwritable" / "rigid_gym-Push-v0"
+    folder.mkdir(parents=True)
+    folder.chmod(0o555)
+    immutable = (writable(folder) and shutil.which("chattr") is not None
+                 and subprocess.run(["chattr", "+i", str(folder)],
+                                    capture_output=True).returncode == 0)
+    if writable(folder):
+        folder.chmod(0o755)
+        pytest.skip("no way to make a folder unwritable here")
+    yield folder
+    if immutable:
+        subprocess.run(["chattr", "-i", str(folder)], check=False)
+    folder.chmod(0o755)
+
+
+def writable(folder) -> bool:
+    """Whether a file can be made in ``folder`` (trying is the only test that holds for root)."""
+    probe = folder / "probe"
+    try:
+        probe.touch()
+    except OSError:
+        return False
+    probe.unlink()
+    return True
+
+
+@pytest.mark.parametrize("cause", ["unwritable folder", "name too long"])
+def test_a_file_that_cannot_be_written_fails_alone_and_says_why(cause, tmp_path, request):
+    """Beside a good recording open at the same time: the good file is complete, the bad
+    recorder raises an OSError naming its file and the OS's reason, and the next recording
+    works."""
+    def recorder(folder, run):
+        return RecordRerun(gym.make("rigid_gym/Push-v0", max_episode_steps=5), folder,
+                           episode_trigger=lambda k: True, run=run)
+
+    if cause == "unwritable folder":
+        bad = recorder(request.getfixturevalue("unwritable_folder").parent, "bad")
+        errnos = {errno.EACCES, errno.EPERM}
+    else:
+        bad = recorder(tmp_path / "bad", "b" * 300)  # 300 + "-episode-0.rrd" > 255 characters
+        errnos = {errno.ENAMETOOLONG}
+    good = recorder(tmp_path / "good", "good")
+    bad.reset(seed=0)
+    good.reset(seed=0)
+    for _ in range(5):
+        bad.step(bad.action_space.sample())  # its episode ends first, while good's is open
+        good.step(good.action_space.sample())
+    good.close()  # the bad file's error is not the good recorder's
+    assert verified(good.paths[0])
+    step, _ = temporal(good.paths[0], "/world/bodies/cube0", "Transform3D:translation")
+    assert step.tolist() == list(range(6))
+    with pytest.raises(OSError) as raised:
+        bad.close()
+    assert raised.value.errno in errnos
+    message = str(raised.value)
+    assert str(bad.paths[0]) in message and os.strerror(raised.value.errno) in message
+    bad.close()  # raised once
+    fresh = recorder(tmp_path / "fresh", "fresh")
+    run_episode(fresh, seed=1)
+    fresh.close()
+    assert verified(fresh.paths[0])
+
+
+def test_a_world_recorder_raises_the_error_of_its_file(tmp_path):
+    from rigid_gym.recording_writer import writer
+
+    world = rg.World(every_shape_scene(), dt=1 / 120)
+    path = tmp_path / f"{'w' * 300}.rrd"
+    recorder = WorldRecorder(world, path)
+    recorder.record()
+    with pytest.raises(OSError, match="File name too long"):
+        recorder.close()
+    # in a with block, the block's own exception goes first; the file's error is kept
+    with pytest.raises(KeyError, match="the block's"):
+        with WorldRecorder(world, path) as recorder:
+            recorder.record()
+            raise KeyError("the block's")
+    assert writer().failures.pop(str(path))[0] == errno.ENAMETOOLONG
 
 
 def test_trigger_names_and_unfinished_episodes(tmp_path):

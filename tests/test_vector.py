@@ -1,5 +1,8 @@
 """The natively batched envs (envs/vector.py), the SB3 adapter, and the one-call step they use."""
 
+import multiprocessing
+import threading
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -104,6 +107,63 @@ def test_vector_env_refuses_what_it_cannot_do():
     envs.reset(seed=0)
     with pytest.raises(ValueError, match=r"actions must have shape \(2, 3\)"):
         envs.step(np.zeros(3))
+
+
+@pytest.mark.parametrize("bad", [
+    "abc", "0.5", np.full((2, 3), 0.5j), np.zeros((2, 3), dtype=object), {"x": 0.5},
+    [["0.5", "0", "0"]] * 2,
+], ids=["str", "numeric str", "complex", "object", "dict", "list of str"])
+def test_actions_that_are_not_real_numbers_are_refused(bad):
+    envs = gym.make_vec("rigid_gym/Push-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    envs.reset(seed=0)
+    with pytest.raises(ValueError, match=r"RigidGymVectorEnv\.step: actions must be a real "
+                                         r"numeric array \(bool, int or float\) in "
+                                         r"Box\(-1\.0, 1\.0, \(2, 3\), float32\), got "):
+        envs.step(bad)
+
+
+@pytest.mark.filterwarnings("ignore:.*use of fork\\(\\) may lead to deadlocks")  # Python >= 3.12
+@pytest.mark.parametrize("when", ["after a step", "during a step"])
+def test_a_forked_child_steps_a_vector_env_its_parent_stepped(when):
+    """The parent's steps started the solver's thread pool; a forked child has none of its
+    threads, and must start a pool of its own rather than wait for ever on the parent's.
+    "during a step": forks while another thread is inside a batched step, holding the pool's
+    locks (without the child forgetting the pool, about a third of such children hang)."""
+    envs = gym.make_vec("rigid_gym/Push-v0", num_envs=4)
+    envs.reset(seed=0)
+    for _ in range(5):
+        envs.step(envs.action_space.sample())
+
+    def child():
+        for _ in range(100):
+            envs.step(envs.action_space.sample())
+
+    forks, stepping, stepper = 1, threading.Event(), None
+    if when == "during a step":  # World.step releases the GIL: the forks land inside it
+        world = envs.unwrapped.world
+
+        def step_until_cleared():
+            while stepping.is_set():
+                world.step(10)
+
+        forks = 10
+        stepping.set()
+        stepper = threading.Thread(target=step_until_cleared)
+        stepper.start()
+    try:
+        for _ in range(forks):
+            process = multiprocessing.get_context("fork").Process(target=child)
+            process.start()
+            process.join(timeout=30)
+            if process.is_alive():  # hung: fail rather than block the suite
+                process.kill()
+                process.join()
+                pytest.fail(f"a child forked {when} hung in its batched steps")
+            assert process.exitcode == 0
+    finally:
+        stepping.clear()
+        if stepper is not None:
+            stepper.join()
 
 
 def test_materials_can_be_randomized_per_copy():
