@@ -1,6 +1,8 @@
 // Signed distances of the geom types (geometry.h).
 #include "geometry.h"
 
+#include "mesh_distance.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -115,64 +117,12 @@ double grid_gap(const Geometry& geo, int m, Vec3 p) {
     return std::sqrt(gx * gx + gy * gy + gz * gz);
 }
 
-// The point of segment [a, b] nearest to p.
-Vec3 closest_on_segment(Vec3 p, Vec3 a, Vec3 b) {
-    const double abx = b.x - a.x, aby = b.y - a.y, abz = b.z - a.z;
-    const double length2 = abx * abx + aby * aby + abz * abz;
-    double t = 0.0;
-    if (length2 > 0.0) {
-        t = std::min(
-            std::max(((p.x - a.x) * abx + (p.y - a.y) * aby + (p.z - a.z) * abz) / length2, 0.0),
-            1.0);
-    }
-    return {a.x + t * abx, a.y + t * aby, a.z + t * abz};
-}
-
-// (a x b) . n: twice the signed area of the triangle (0, a, b) seen along n, times |n|.
-double normal_area(Vec3 a, Vec3 b, Vec3 n) {
-    return (a.y * b.z - a.z * b.y) * n.x + (a.z * b.x - a.x * b.z) * n.y +
-           (a.x * b.y - a.y * b.x) * n.z;
-}
-
 double distance2(Vec3 p, Vec3 q) {
     const double dx = p.x - q.x, dy = p.y - q.y, dz = p.z - q.z;
     return dx * dx + dy * dy + dz * dz;
 }
 
 }  // namespace
-
-// Its projection on the plane when that lies inside the triangle, else the nearest point of
-// its edges.
-Vec3 closest_on_triangle(Vec3 p, Vec3 a, Vec3 b, Vec3 c) {
-    const double abx = b.x - a.x, aby = b.y - a.y, abz = b.z - a.z;
-    const double acx = c.x - a.x, acy = c.y - a.y, acz = c.z - a.z;
-    const Vec3 n = {aby * acz - abz * acy, abz * acx - abx * acz, abx * acy - aby * acx};
-    const double area2 = n.x * n.x + n.y * n.y + n.z * n.z;
-    if (area2 > 0.0) {
-        const double s = ((p.x - a.x) * n.x + (p.y - a.y) * n.y + (p.z - a.z) * n.z) / area2;
-        const Vec3 q = {p.x - s * n.x, p.y - s * n.y, p.z - s * n.z};
-        // q's barycentric weights, times area2: the sub-triangles opposite a and b
-        const double u = normal_area(sub(b, q), sub(c, q), n);
-        const double v = normal_area(sub(c, q), sub(a, q), n);
-        if (u >= 0.0 && v >= 0.0 && u + v <= area2) {
-            return q;
-        }
-    }
-    Vec3 best_point = closest_on_segment(p, a, b);
-    double best = distance2(p, best_point);
-    Vec3 s = closest_on_segment(p, b, c);
-    double d2 = distance2(p, s);
-    if (d2 < best) {
-        best = d2;
-        best_point = s;
-    }
-    s = closest_on_segment(p, c, a);
-    d2 = distance2(p, s);
-    if (d2 < best) {
-        best_point = s;
-    }
-    return best_point;
-}
 
 Distance mesh_distance(const Geometry& geo, int m, Vec3 p) {
     const Array<Vec3>& v = geo.mesh_vertices;

@@ -81,7 +81,4 @@ Distance geom_distance_within(const Geometry& geo, int g, Vec3 p, double reach);
 // gradient (p - nearest point) / distance. O(T).
 Distance mesh_distance(const Geometry& geo, int m, Vec3 p);
 
-// The point of triangle (a, b, c) nearest to p.
-Vec3 closest_on_triangle(Vec3 p, Vec3 a, Vec3 b, Vec3 c);
-
 }  // namespace rg

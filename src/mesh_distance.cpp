@@ -14,7 +14,7 @@ namespace {
 constexpr double FOUR_PI = 4.0 * 3.14159265358979323846;
 
 // A triangle whose corner angle at its first vertex has |sin| below this is treated as a
-// segment by point_triangle_distance_squared (its plane is not well defined).
+// segment by closest_on_triangle (its plane is not well defined).
 constexpr double DEGENERATE_SINE = 1e-12;
 
 // Signed solid angle (sr, in (-2 pi, 2 pi]) that triangle (a, b, c) subtends at the origin.
@@ -31,41 +31,41 @@ double solid_angle(Vec3 a, Vec3 b, Vec3 c) {
     return 2.0 * std::atan2(triple, denominator);
 }
 
-// Squared distance (m^2) from point p to the segment [a, b] (a == b allowed).
-double point_segment_distance_squared(Vec3 p, Vec3 a, Vec3 b) {
+// The point of segment [a, b] nearest to p (a == b allowed).
+Vec3 closest_on_segment(Vec3 p, Vec3 a, Vec3 b) {
     const Vec3 ab = sub(b, a);
-    const Vec3 ap = sub(p, a);
     const double length2 = dot(ab, ab);
     double t = 0.0;
     if (length2 > 0.0) {
-        t = std::min(std::max(dot(ap, ab) / length2, 0.0), 1.0);
+        t = std::min(std::max(dot(sub(p, a), ab) / length2, 0.0), 1.0);
     }
-    const Vec3 d = sub(ap, scale(t, ab));
+    return add(a, scale(t, ab));
+}
+
+double distance2(Vec3 p, Vec3 q) {
+    const Vec3 d = sub(p, q);
     return dot(d, d);
 }
 
-// Squared distance (m^2) from p to a zero-area triangle: the nearest of its three edges.
-double degenerate_distance_squared(Vec3 p, Vec3 a, Vec3 b, Vec3 c) {
-    return std::min(std::min(point_segment_distance_squared(p, a, b),
-                             point_segment_distance_squared(p, b, c)),
-                    point_segment_distance_squared(p, c, a));
-}
+}  // namespace
 
-// Squared distance (m^2) from point p to the closest point of triangle (a, b, c), m.
-//
 // Ericson, Real-Time Collision Detection (2005) 5.1.5: find the Voronoi region of p (a
-// vertex, an edge or the face) from dot products, then project onto that feature.
-double point_triangle_distance_squared(Vec3 p, Vec3 a, Vec3 b, Vec3 c) {
+// vertex, an edge or the face) from dot products, then project onto that feature. A
+// zero-area triangle's nearest point is its nearest edge's.
+Vec3 closest_on_triangle(Vec3 p, Vec3 a, Vec3 b, Vec3 c) {
     const Vec3 ab = sub(b, a);
     const Vec3 ac = sub(c, a);
     const Vec3 n = cross(ab, ac);
     const double area2 = dot(n, n);
-    const double ab2 = dot(ab, ab);
-    const double ac2 = dot(ac, ac);
-    if (area2 <= DEGENERATE_SINE * DEGENERATE_SINE * ab2 * ac2) {
-        return degenerate_distance_squared(p, a, b, c);
+    if (area2 <= DEGENERATE_SINE * DEGENERATE_SINE * dot(ab, ab) * dot(ac, ac)) {
+        Vec3 best = closest_on_segment(p, a, b);
+        for (const Vec3 q : {closest_on_segment(p, b, c), closest_on_segment(p, c, a)}) {
+            if (distance2(p, q) < distance2(p, best)) {
+                best = q;
+            }
+        }
+        return best;
     }
-
     const Vec3 ap = sub(p, a);
     const double d1 = dot(ab, ap);
     const double d2 = dot(ac, ap);
@@ -97,9 +97,10 @@ double point_triangle_distance_squared(Vec3 p, Vec3 a, Vec3 b, Vec3 c) {
         v = vb / (va + vb + vc);
         w = vc / (va + vb + vc);
     }
-    const Vec3 d = sub(sub(ap, scale(v, ab)), scale(w, ac));
-    return dot(d, d);
+    return add(add(a, scale(v, ab)), scale(w, ac));
 }
+
+namespace {
 
 // Winding number of point p (m) with respect to the mesh: sum of solid angles / 4 pi.
 double point_winding_number(Vec3 p, Span<const Vec3> vertices, Span<const Index3> triangles) {
@@ -117,8 +118,8 @@ double point_mesh_distance(Vec3 p, Span<const Vec3> vertices, Span<const Index3>
     double best = std::numeric_limits<double>::infinity();
     for (int64_t t = 0; t < triangles.size; ++t) {
         const Index3 tri = triangles[t];
-        best = std::min(best, point_triangle_distance_squared(p, vertices[tri[0]],
-                                                              vertices[tri[1]], vertices[tri[2]]));
+        best = std::min(best, distance2(p, closest_on_triangle(p, vertices[tri[0]],
+                                                               vertices[tri[1]], vertices[tri[2]])));
     }
     return std::sqrt(best);
 }

@@ -18,6 +18,9 @@
 
 namespace rg {
 
+// The point of triangle (a, b, c) nearest to p.
+Vec3 closest_on_triangle(Vec3 p, Vec3 a, Vec3 b, Vec3 c);
+
 // Generalised winding number of each point: the signed solid angles of all triangles / 4 pi,
 // into out (P,). 1 inside a closed outward mesh, 0 outside, 1/2 on the surface (up to
 // rounding). Right for nonconvex meshes too (Jacobson et al. 2013).
