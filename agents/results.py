@@ -77,13 +77,29 @@ def env_steps(run: dict) -> str:
 
 
 def minutes(runs: list[dict], key: str) -> str:
-    """Mean of ``key`` (seconds) over the runs that recorded it, in minutes; older runs have no
-    cpu_seconds."""
+    """Mean of ``key`` (seconds) over the runs that recorded it, in minutes (seconds under one
+    minute); older runs have no cpu_seconds."""
     known = [run[key] for run in runs if key in run]
     if not known:
         return "—"
-    return f"{np.mean(known) / 60:.0f} min" + ("" if len(known) == len(runs)
-                                                 else f" ({len(known)} of {len(runs)} runs)")
+    mean = np.mean(known)
+    text = f"{mean / 60:.0f} min" if mean >= 60 else f"{mean:.0f} s"
+    return text + ("" if len(known) == len(runs) else f" ({len(known)} of {len(runs)} runs)")
+
+
+TABLE_HEADER = ("| task | algorithm | env steps | wall time per seed | CPU time per seed | seeds | "
+                "success rate (mean ± std over seeds) |\n|---|---|---|---|---|---|---|")
+"""The results table's header rows (markdown)."""
+
+
+def table_row(task: str, runs: list[dict], rates: list[float]) -> str:
+    """One row of the results table: ``task`` (an env id, maybe with its settings), the runs'
+    run.json records (one per seed, the first naming the method and budget) and their success
+    rates (fractions)."""
+    return (f"| {task} | {method(runs[0])} | {env_steps(runs[0])} | "
+            f"{minutes(runs, 'wall_seconds')} | {minutes(runs, 'cpu_seconds')} | {len(runs)} | "
+            f"{np.mean(rates):.0%} ± {np.std(rates):.0%} "
+            f"({', '.join(f'{r:.0%}' for r in rates)}) |")
 
 
 def main():
@@ -92,18 +108,13 @@ def main():
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--plots", type=Path, default=Path("docs/images"))
     args = parser.parse_args()
-    print("| task | algorithm | env steps | wall time per seed | CPU time per seed | seeds | "
-          "success rate (mean ± std over seeds) |")
-    print("|---|---|---|---|---|---|---|")
+    print(TABLE_HEADER)
     args.plots.mkdir(parents=True, exist_ok=True)
     for env_id, folders in find_runs(args.runs).items():
         metas = [json.loads((f / "run.json").read_text()) for f in folders]
         rates = [evaluate(f / "model.zip", env_id, args.episodes)["success_rate"]
                  for f in folders]
-        print(f"| {env_id} | {method(metas[0])} | {env_steps(metas[0])} | "
-              f"{minutes(metas, 'wall_seconds')} | {minutes(metas, 'cpu_seconds')} | "
-              f"{len(folders)} | {np.mean(rates):.0%} ± "
-              f"{np.std(rates):.0%} ({', '.join(f'{r:.0%}' for r in rates)}) |", flush=True)
+        print(table_row(env_id, metas, rates), flush=True)
         with_curves = [f for f in folders if (f / "evaluations.csv").is_file()]
         if with_curves:
             plot_curves(env_id, with_curves, args.plots / f"curve_{env_id.split('/')[-1]}.png")

@@ -4,31 +4,40 @@
     run = train("rigid_gym/Push-v0", seed=0)            # settings from hyperparams.yml
 
     rigid-gym train rigid_gym/Push-v0 --seed 0 --steps 200000 --progress-bar
+    rigid-gym train rigid_gym/Push-v0 --seed 0 --checkpoint-freq 10000 --resume   # after a kill
 
 A run writes one folder, ``<out>/<task>/<algo>-seed<seed>/``:
 
     model.zip           the final policy (``rigid-gym evaluate`` loads it)
     run.json            env id, algorithm, seed, budget, settings, the command line, and after
-                        training wall_seconds and cpu_seconds (this process's CPU time)
-    evaluations.csv     timesteps, success_rate, mean_return: deterministic episodes on fixed
-                        seeds, every ``eval_freq`` steps (the learning curve)
-    checkpoints/        model_<steps>_steps.zip every ``checkpoint_freq`` steps (if set)
-    monitor.csv         every training episode: return, length, is_success
+                        training wall_seconds and cpu_seconds (this process's CPU time);
+                        resumed_at: the env steps each resume went on from
+    evaluations.csv     timesteps, success_rate, mean_return, wall_seconds: deterministic
+                        episodes on fixed seeds, every ``eval_freq`` steps (the learning curve)
+    checkpoints/        step_<steps>/ every ``checkpoint_freq`` steps and at the end (if set):
+                        model.zip, run.json, evaluations.csv and the monitor files as they were
+                        then, and in the newest one the replay buffer; ``train(resume=...)``
+                        goes on from one
+    <rank>.monitor.csv  every training episode of env <rank>: return, length, is_success
 """
 
 from __future__ import annotations
 
 import csv
 import json
+import pickle
+import shutil
 import sys
 import time
+import warnings
 from pathlib import Path
+from typing import Callable
 
 import gymnasium as gym
 import numpy as np
 import yaml
 
-from stable_baselines3.common.callbacks import BaseCallback, CallbackList, CheckpointCallback
+from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import VecCheckNan
 
@@ -42,9 +51,15 @@ DEMO_SEED = 2_000_000
 (small) and the evaluation seeds (``EVAL_SEED`` = 1,000,000 onwards)."""
 
 
+def hyperparams_table() -> dict[str, dict]:
+    """hyperparams.yml: env id -> its settings (algo, n_timesteps, n_envs, her, demonstrations,
+    kwargs)."""
+    return yaml.safe_load(HYPERPARAMS.read_text())
+
+
 def load_hyperparams(env_id: str) -> dict:
     """The settings for ``env_id`` from hyperparams.yml."""
-    table = yaml.safe_load(HYPERPARAMS.read_text())
+    table = hyperparams_table()
     if env_id not in table:
         raise ValueError(f"train: no settings for {env_id!r} in {HYPERPARAMS.name}; "
                          f"known ids: {sorted(table)}")
@@ -82,15 +97,22 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
           n_envs: int | None = None, out: str | Path = "runs", eval_freq: int = 10_000,
           eval_episodes: int = 20, checkpoint_freq: int = 0, progress_bar: bool = False,
           threads: int = 1, verbose: int = 0, overrides: dict | None = None,
-          demonstrations: int | None = None) -> Path:
+          demonstrations: int | None = None, resume: str | Path | None = None,
+          on_checkpoint: Callable[[Path], None] | None = None) -> Path:
     """Train on ``env_id`` and return the run folder (see the module docstring).
 
     algo, timesteps (env steps), n_envs: override hyperparams.yml. eval_freq: env steps between
     evaluations of ``eval_episodes`` deterministic episodes (0: none). checkpoint_freq: env
-    steps between saved checkpoints (0: none). threads: PyTorch's CPU threads. overrides:
-    algorithm arguments that replace those of hyperparams.yml (e.g. learning_starts).
-    demonstrations: scripted episodes put in the replay buffer before training (off-policy
-    only; default: hyperparams.yml's ``demonstrations``, else 0), see ``add_demonstrations``.
+    steps between checkpoints (0: none; with it, the end of training is one too). threads:
+    PyTorch's CPU threads. overrides: algorithm arguments that replace those of
+    hyperparams.yml (e.g. learning_starts). demonstrations: scripted episodes put in the replay
+    buffer before training (off-policy only; default: hyperparams.yml's ``demonstrations``,
+    else 0), see ``add_demonstrations``. resume: a checkpoint folder of this run
+    (``latest_checkpoint``) to go on from: its model (with the algorithm arguments it was made
+    with; ``overrides`` and ``demonstrations`` are not applied again), replay buffer and
+    files, trained on to ``timesteps`` in all (not bit-identical to a run never stopped: the
+    envs start afresh).
+    on_checkpoint: called with each checkpoint's folder once it is complete.
     """
     import torch
 
@@ -105,42 +127,73 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
                         ("checkpoint_freq", checkpoint_freq)):
         _count(value, name, 0)
     torch.set_num_threads(_count(threads, "threads", 1))
-
-    folder = run_directory(out, env_id, algo, seed)
-    folder.mkdir(parents=True, exist_ok=True)
-    env = make_vec_env(env_id, n_envs=n_envs, seed=seed, monitor_dir=str(folder),
-                       monitor_kwargs={"info_keywords": ("is_success",)})
-    env = VecCheckNan(env, raise_exception=True)  # a diverging network fails where it starts
-    kwargs = {**settings.get("kwargs", {}), **(overrides or {})}
-    if algo != "ppo" and "her" in settings:
-        from stable_baselines3 import HerReplayBuffer
-        kwargs.update(replay_buffer_class=HerReplayBuffer,
-                      replay_buffer_kwargs=dict(settings["her"]))
-    model = cls("MultiInputPolicy", env, seed=seed, verbose=verbose, **kwargs)
     demonstrations = _count(demonstrations if demonstrations is not None
                             else settings.get("demonstrations", 0), "demonstrations", 0)
     if demonstrations and algo == "ppo":
         raise ValueError("train: demonstrations fill a replay buffer; ppo has none")
-    demo = add_demonstrations(model, env_id, demonstrations, seed) if demonstrations else None
-    _write_run(folder, env_id, algo, seed, timesteps, n_envs, kwargs, demo)
 
+    folder = run_directory(out, env_id, algo, seed)
+    folder.mkdir(parents=True, exist_ok=True)
+    if resume is not None:
+        record = _restore_files(Path(resume), folder, env_id, algo, seed)
+    env = make_vec_env(env_id, n_envs=n_envs, seed=seed, monitor_dir=str(folder),
+                       monitor_kwargs={"info_keywords": ("is_success",),
+                                       "override_existing": resume is None})
+    env = VecCheckNan(env, raise_exception=True)  # a diverging network fails where it starts
+    if resume is not None:  # the checkpoint's model, with the settings it was made with
+        model = cls.load(Path(resume) / "model.zip", env=env, device="cpu")
+        load_buffers(model, Path(resume))
+        record["resumed_at"] = record.get("resumed_at", []) + [model.num_timesteps]
+        record["timesteps"] = timesteps
+        (folder / "run.json").write_text(json.dumps(record, indent=2))
+    else:
+        kwargs = {**settings.get("kwargs", {}), **(overrides or {})}
+        if algo != "ppo" and "her" in settings:
+            from stable_baselines3 import HerReplayBuffer
+            kwargs.update(replay_buffer_class=HerReplayBuffer,
+                          replay_buffer_kwargs=dict(settings["her"]))
+        model = cls("MultiInputPolicy", env, seed=seed, verbose=verbose, **kwargs)
+        demo = add_demonstrations(model, env_id, demonstrations, seed) if demonstrations else None
+        _write_run(folder, env_id, algo, seed, timesteps, n_envs, kwargs, demo)
+
+    before = record if resume is not None else {}  # the seconds of the parts before a resume
+    clock = Clock(before.get("wall_seconds", 0.0), before.get("cpu_seconds", 0.0))
     callbacks = []
     if eval_freq:
-        callbacks.append(SuccessEvaluation(env_id, folder / "evaluations.csv",
-                                           eval_freq // n_envs or 1, eval_episodes))
-    if checkpoint_freq:
-        callbacks.append(CheckpointCallback(checkpoint_freq // n_envs or 1,
-                                            str(folder / "checkpoints"), name_prefix="model"))
-    start, cpu_start = time.perf_counter(), time.process_time()
-    model.learn(timesteps, callback=CallbackList(callbacks), progress_bar=progress_bar)
+        callbacks.append(SuccessEvaluation(env_id, folder / "evaluations.csv", eval_freq,
+                                           eval_episodes, clock, append=resume is not None))
+    checkpoints = Checkpoints(folder, checkpoint_freq, clock, on_checkpoint) \
+        if checkpoint_freq else None
+    callbacks += [checkpoints] if checkpoints else []
+    model.learn(max(0, timesteps - model.num_timesteps), callback=CallbackList(callbacks),
+                progress_bar=progress_bar, reset_num_timesteps=resume is None)
     model.save(folder / "model.zip")
     env.close()
-    record = json.loads((folder / "run.json").read_text())
-    record["wall_seconds"] = round(time.perf_counter() - start, 1)  # training and evaluations
-    # this process's CPU time: what the run costs whatever else shares the machine
-    record["cpu_seconds"] = round(time.process_time() - cpu_start, 1)
-    (folder / "run.json").write_text(json.dumps(record, indent=2))
+    _write_seconds(folder, clock)
+    if checkpoints and checkpoints.written != model.num_timesteps:
+        checkpoints.write()  # the end of training, with its times
     return folder
+
+
+class Clock:
+    """The wall and CPU seconds a run has spent (training and evaluations), counting those of
+    the parts before a resume (``wall``, ``cpu``, s)."""
+
+    def __init__(self, wall: float = 0.0, cpu: float = 0.0):
+        self.wall, self.cpu = wall, cpu
+        self.start, self.cpu_start = time.perf_counter(), time.process_time()
+
+    def seconds(self) -> dict:
+        """{"wall_seconds", "cpu_seconds"}: so far, s (CPU: this process's, what the run costs
+        whatever else shares the machine)."""
+        return {"wall_seconds": round(self.wall + time.perf_counter() - self.start, 1),
+                "cpu_seconds": round(self.cpu + time.process_time() - self.cpu_start, 1)}
+
+
+def _write_seconds(folder: Path, clock: Clock) -> None:
+    record = json.loads((folder / "run.json").read_text())
+    record.update(clock.seconds())
+    (folder / "run.json").write_text(json.dumps(record, indent=2))
 
 
 def _count(value, name: str, low: int) -> int:
@@ -198,31 +251,201 @@ def _write_run(folder: Path, env_id, algo, seed, timesteps, n_envs, kwargs, demo
     (folder / "run.json").write_text(json.dumps(record, indent=2))
 
 
-class SuccessEvaluation(BaseCallback):
-    """Every ``every`` calls (env steps / n_envs), evaluate the deterministic policy on fixed
-    seeds and append (timesteps, success_rate, mean_return, wall_seconds) to ``path``."""
+class EveryNSteps(BaseCallback):
+    """Calls ``act()`` from ``check()`` when the run's env steps have passed a multiple of
+    ``every`` since the last time (so a resumed run keeps the cadence); subclasses say what
+    ``act`` does and which of SB3's hooks calls ``check``."""
 
-    def __init__(self, env_id: str, path: Path, every: int, episodes: int):
+    def __init__(self, every: int):
         super().__init__()
+        self.every = every
+        self.done_at = 0
+        """env steps at the last ``act`` (or at the start of training)"""
+
+    def _on_training_start(self) -> None:
+        self.done_at = self.model.num_timesteps
+
+    def check(self) -> None:
+        if self.num_timesteps // self.every > self.done_at // self.every:
+            self.done_at = self.num_timesteps
+            self.act()
+
+    def act(self) -> None:
+        raise NotImplementedError
+
+
+class SuccessEvaluation(EveryNSteps):
+    """Every ``every`` env steps, and at the end of training, evaluate the deterministic policy
+    on fixed seeds and append (timesteps, success_rate, mean_return, wall_seconds of the run)
+    to ``path``; ``append``: keep the rows already there (a resumed run)."""
+
+    def __init__(self, env_id: str, path: Path, every: int, episodes: int, clock: Clock,
+                 append: bool = False):
+        super().__init__(every)
         self.env = gym.make(env_id)
-        self.env_id, self.path, self.every, self.episodes = env_id, path, every, episodes
-        self.start = time.perf_counter()
-        with open(path, "w", newline="") as f:
-            csv.writer(f).writerow(["timesteps", "success_rate", "mean_return", "wall_seconds"])
+        self.path, self.episodes, self.clock = path, episodes, clock
+        if not append:
+            with open(path, "w", newline="") as f:
+                csv.writer(f).writerow(["timesteps", "success_rate", "mean_return",
+                                        "wall_seconds"])
 
     def _on_step(self) -> bool:
-        if self.n_calls % self.every == 0:
-            self.write()
+        self.check()
         return True
 
     def _on_training_end(self) -> None:
-        if self.n_calls % self.every != 0:
-            self.write()
+        if self.done_at != self.num_timesteps:
+            self.act()
 
-    def write(self) -> None:
+    def act(self) -> None:
         result = success_rate(self.model, self.env, self.episodes)
         row = [self.num_timesteps, result["success_rate"], result["mean_return"],
-               round(time.perf_counter() - self.start, 1)]
+               self.clock.seconds()["wall_seconds"]]
         with open(self.path, "a", newline="") as f:
             csv.writer(f).writerow(row)
         self.logger.record("eval/success_rate", result["success_rate"])
+
+
+CHECKPOINT_FILES = ("run.json", "evaluations.csv", "*.monitor.csv")
+"""The run folder's files that a checkpoint copies, as they were at its step."""
+
+
+class Checkpoints(EveryNSteps):
+    """At the first rollout end past every ``every`` env steps (each step for SAC, after
+    ``n_steps`` for PPO: the step's transition is in the replay buffer by then), write
+    ``folder/checkpoints/step_<timesteps>/``: model.zip, the run's files
+    (``CHECKPOINT_FILES``, run.json with the seconds spent so far) and the replay buffer
+    (``save_buffers``; off-policy), which only the newest checkpoint keeps. ``on_checkpoint``
+    is called with each finished folder."""
+
+    def __init__(self, folder: Path, every: int, clock: Clock,
+                 on_checkpoint: Callable[[Path], None] | None = None):
+        super().__init__(every)
+        self.folder, self.clock, self.on_checkpoint = folder, clock, on_checkpoint
+        self.written = -1
+        """env steps of the last checkpoint written"""
+
+    def _on_step(self) -> bool:
+        return True
+
+    def _on_rollout_end(self) -> None:
+        self.check()
+
+    def act(self) -> None:
+        self.write()
+
+    def write(self) -> Path:
+        """Write the checkpoint of the model as it is now; returns its folder."""
+        steps = self.model.num_timesteps
+        target = self.folder / "checkpoints" / f"step_{steps}"
+        partial = target.with_name(target.name + ".partial")  # a killed write leaves only this
+        shutil.rmtree(partial, ignore_errors=True)
+        partial.mkdir(parents=True)
+        self.model.save(partial / "model.zip")
+        save_buffers(self.model, partial)
+        for pattern in CHECKPOINT_FILES:
+            for path in self.folder.glob(pattern):
+                shutil.copy2(path, partial / path.name)
+        record = json.loads((partial / "run.json").read_text())
+        record.update(self.clock.seconds())
+        (partial / "run.json").write_text(json.dumps(record, indent=2))
+        shutil.rmtree(target, ignore_errors=True)
+        partial.rename(target)
+        for older in target.parent.glob("step_*/*_buffer.pkl"):
+            if older.parent != target:
+                older.unlink()
+        self.written = steps
+        if self.on_checkpoint is not None:
+            self.on_checkpoint(target)
+        return target
+
+
+def latest_checkpoint(folder: str | Path) -> Path | None:
+    """The newest complete checkpoint under a run folder (``checkpoints/step_<n>/``), or None."""
+    found = [(int(path.name.split("_")[1]), path)
+             for path in Path(folder).glob("checkpoints/step_*")
+             if path.name.split("_")[1].isdigit() and (path / "model.zip").is_file()]
+    return max(found)[1] if found else None
+
+
+BUFFERS = ("replay_buffer", "demo_buffer")
+"""The models' buffers a checkpoint keeps: SB3's replay buffer, bc_sac's demonstrations."""
+
+
+def save_buffers(model, folder: Path) -> None:
+    """Write each of ``model``'s buffers (``BUFFERS``) that it has to ``folder/<name>.pkl``:
+    the filled part of every array of the buffer's length (a 1e6-transition buffer holding
+    20k costs 20k rows on disk, not 1e6), the other arrays whole, and ``pos`` and ``full``."""
+    for name in BUFFERS:
+        buffer = getattr(model, name, None)
+        if buffer is None:
+            continue
+        rows = buffer.buffer_size if buffer.full else buffer.pos
+
+        def filled(array: np.ndarray) -> np.ndarray:
+            return array[:rows] if array.shape[:1] == (buffer.buffer_size,) else array
+
+        state = {"capacity": buffer.buffer_size * buffer.n_envs,
+                 "buffer_size": buffer.buffer_size, "pos": buffer.pos, "full": buffer.full}
+        for key, value in vars(buffer).items():
+            if isinstance(value, np.ndarray):
+                state[key] = filled(value)
+            elif isinstance(value, dict) and value and all(
+                    isinstance(v, np.ndarray) for v in value.values()):
+                state[key] = {k: filled(v) for k, v in value.items()}
+        with open(folder / f"{name}.pkl", "wb") as f:
+            pickle.dump(state, f, protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def load_buffers(model, folder: Path) -> None:
+    """Fill ``model``'s buffers from ``save_buffers``' files in ``folder`` (a bc_sac model's
+    demonstration buffer is made first). An episode that the checkpoint cut short ends there
+    (HER's ``truncate_last_trajectory``): the resumed run's envs start new ones."""
+    for name in BUFFERS:
+        path = folder / f"{name}.pkl"
+        if not path.is_file():
+            if name == "replay_buffer" and hasattr(model, name):  # off-policy: it needs one
+                raise ValueError(f"train: {folder} has no replay buffer (only the newest "
+                                 "checkpoint of a run keeps it); resume from that one")
+            continue
+        with open(path, "rb") as f:
+            state = pickle.load(f)
+        capacity = state.pop("capacity")  # transitions over all envs, as buffers are made
+        if name == "demo_buffer":
+            model.make_demo_buffer(capacity)
+        buffer = getattr(model, name)
+        if buffer.buffer_size != state["buffer_size"]:
+            raise ValueError(f"train: {path} holds a buffer of {state['buffer_size']} rows, "
+                             f"the model's has {buffer.buffer_size}")
+        for key, value in state.items():
+            target = getattr(buffer, key)
+            if isinstance(value, dict):
+                for k, v in value.items():
+                    target[k][:len(v)] = v
+            elif isinstance(value, np.ndarray) and target.shape != value.shape:
+                target[:len(value)] = value
+            else:
+                setattr(buffer, key, value)
+        if hasattr(buffer, "truncate_last_trajectory"):
+            with warnings.catch_warnings():  # its warning is about SB3's own loading
+                warnings.simplefilter("ignore")
+                buffer.truncate_last_trajectory()
+
+
+def _restore_files(checkpoint: Path, folder: Path, env_id: str, algo: str, seed: int) -> dict:
+    """Put a checkpoint's copies of the run's files back in the run folder (rows written after
+    it are dropped) and return its run.json, checked to be of this env, algorithm and seed."""
+    meta = checkpoint / "run.json"
+    if not (meta.is_file() and (checkpoint / "model.zip").is_file()):
+        raise ValueError(f"train: {checkpoint} is not a checkpoint (model.zip and run.json); "
+                         "latest_checkpoint(run folder) finds the newest")
+    record = json.loads(meta.read_text())
+    found = (record["env_id"], record["algo"], record["seed"])
+    if found != (env_id, algo, seed):
+        raise ValueError(f"train: {checkpoint} is a checkpoint of env, algo, seed {found}, "
+                         f"not {(env_id, algo, seed)}")
+    for pattern in CHECKPOINT_FILES:
+        for path in checkpoint.glob(pattern):
+            if path.parent.resolve() != folder.resolve():
+                shutil.copy2(path, folder / path.name)
+    return record

@@ -5,7 +5,12 @@
                      [--seed S] [--out DIR] [--run NAME] [--contacts]
     rigid-gym replay FILE [FILE ...]
     rigid-gym train ENV_ID [--algo sac|tqc|ppo] [--steps N] [--seed S] [--n-envs N] [--out DIR]
-                    [--eval-freq N] [--eval-episodes N] [--checkpoint-freq N] [--progress-bar]
+                    [--eval-freq N] [--eval-episodes N] [--checkpoint-freq N] [--resume]
+                    [--progress-bar]
+    rigid-gym sweep ENV_ID [ENV_ID ...] --seeds S [S ...] [--param KEY=V1,V2 ...] [--steps N]
+                    [--out DIR] [--name NAME] [--eval-freq N] [--eval-episodes N]
+                    [--cpus-per-trial C] [--max-failures K]
+    rigid-gym sweep --resume EXPERIMENT_DIR
     rigid-gym evaluate MODEL [--env ENV_ID] [--episodes N] [--record DIR]
     rigid-gym report [--out DIR] [--quick] [--no-compare]
 
@@ -14,13 +19,15 @@ a sliding box) and prints each result next to its closed form. ``record`` writes
 an env to ``.rrd`` files (``rigid_gym.recording``) and ``replay`` opens them in the rerun
 viewer installed with rerun-sdk. ``train`` and ``evaluate`` run the stable-baselines3
 baselines (``rigid_gym.agents``): settings from ``agents/hyperparams.yml``, success rates over
-seeded episodes. ``report`` regenerates the accuracy and stability report
-(``rigid_gym.report``: OUT/report.md and OUT/images/report/*.png).
+seeded episodes; ``sweep`` runs many training runs as Ray Tune trials on the Ray cluster
+that RAY_ADDRESS names (``rigid_gym.agents.sweep``). ``report`` regenerates the accuracy and
+stability report (``rigid_gym.report``: OUT/report.md and OUT/images/report/*.png).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import os
 import shutil
 import subprocess
@@ -151,19 +158,48 @@ def make_policy(env, policy: str, algo: str | None, seed: int):
 
 def train(args) -> int:
     """Train a baseline; print where the run went and its final evaluation."""
+    from rigid_gym.agents.train import latest_checkpoint, load_hyperparams, run_directory
     from rigid_gym.agents.train import train as run_training
 
+    resume = None
+    if args.resume:
+        folder = run_directory(args.out, args.env_id,
+                               args.algo or load_hyperparams(args.env_id)["algo"], args.seed)
+        resume = latest_checkpoint(folder)
+        if resume is None:
+            raise ValueError(f"--resume: no checkpoint in {folder}/checkpoints (runs write "
+                             "them with --checkpoint-freq)")
+        print(f"resuming from {resume}")
     folder = run_training(args.env_id, algo=args.algo, timesteps=args.steps, seed=args.seed,
                           n_envs=args.n_envs, out=args.out, eval_freq=args.eval_freq,
                           eval_episodes=args.eval_episodes,
                           checkpoint_freq=args.checkpoint_freq, progress_bar=args.progress_bar,
-                          demonstrations=args.demos)
+                          demonstrations=args.demos, resume=resume)
     print(f"trained {args.env_id}: {folder / 'model.zip'}")
     if args.eval_freq:
         last = (folder / "evaluations.csv").read_text().strip().splitlines()[-1].split(",")
         print(f"final evaluation ({args.eval_episodes} episodes): success rate "
               f"{float(last[1]):.0%}, mean return {float(last[2]):.1f}")
     return 0
+
+
+def sweep(args) -> int:
+    """Run (or resume) a sweep; print the results table; 1 if a trial failed."""
+    from rigid_gym.agents.sweep import parse_param, sweep as run_sweep
+
+    if args.resume is None and not (args.env_ids and args.seeds):
+        raise ValueError("sweep: give ENV_ID... and --seeds, or --resume EXPERIMENT_DIR")
+    params = dict(parse_param(text) for text in args.param)
+    if importlib.util.find_spec("ray") is None:
+        raise ValueError("sweep needs Ray: pip install 'rigid_gym[ray]'")
+    folder, failed = run_sweep(args.env_ids, args.seeds, params, steps=args.steps, out=args.out,
+                               name=args.name, eval_freq=args.eval_freq,
+                               eval_episodes=args.eval_episodes,
+                               cpus_per_trial=args.cpus_per_trial,
+                               max_failures=args.max_failures, resume=args.resume)
+    print((folder / "results.md").read_text(), end="")
+    print(f"sweep: {folder} (results.md, curve_*.png, a folder per trial)")
+    return 1 if failed else 0
 
 
 def evaluate(args) -> int:
@@ -288,7 +324,33 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--demos", type=bounded(int, 0, 10**6), default=None,
                    help="scripted episodes put in the replay buffer first (off-policy only; "
                         "default: hyperparams.yml, else 0)")
+    p.add_argument("--resume", action="store_true",
+                   help="go on from the run's newest checkpoint (see --checkpoint-freq)")
     p.add_argument("--progress-bar", action="store_true")
+    p = commands.add_parser("sweep", help="training runs as Ray Tune trials on a Ray cluster "
+                                          "(RAY_ADDRESS; a local one when unset)")
+    p.add_argument("env_ids", nargs="*", type=env_id, metavar="ENV_ID",
+                   help="e.g. rigid_gym/Push-v0 rigid_gym/Throw-v0")
+    p.add_argument("--seeds", nargs="+", type=bounded(int, 0, 2**32 - 1), default=[],
+                   help="training seeds, 0 to 2^32-1; every env id runs each")
+    p.add_argument("--param", action="append", default=[], metavar="KEY=V1,V2",
+                   help="an algorithm argument and the values to try (YAML; repeat for a grid)")
+    p.add_argument("--steps", type=bounded(int, 1, 10**9), default=None,
+                   help="env steps per run, 1 to 1e9 (default: hyperparams.yml)")
+    p.add_argument("--out", default="runs/sweeps",
+                   help="folder of experiment folders (default runs/sweeps; on a cluster, one "
+                        "that every machine sees)")
+    p.add_argument("--name", default=None, help="experiment name (default sweep-<date-time>)")
+    p.add_argument("--eval-freq", type=bounded(int, 1, 10**9), default=10_000,
+                   help="env steps between evaluations and checkpoints (default 10000)")
+    p.add_argument("--eval-episodes", type=bounded(int, 1, 10**4), default=20)
+    p.add_argument("--cpus-per-trial", type=bounded(float, 0.01, 1024), default=1.0,
+                   help="CPUs Ray reserves per trial (default 1)")
+    p.add_argument("--max-failures", type=bounded(int, 0, 100), default=0,
+                   help="retries of a failed trial from its newest checkpoint (default 0)")
+    p.add_argument("--resume", metavar="EXPERIMENT_DIR", default=None,
+                   help="go on with a stopped sweep: failed and unfinished trials resume from "
+                        "their newest checkpoints")
     p = commands.add_parser("evaluate", help="success rate of a trained model")
     p.add_argument("model", help="a model.zip written by rigid-gym train")
     p.add_argument("--env", type=env_id, default=None,
@@ -309,6 +371,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "replay":
         return replay(args.files)
     if args.command == "report":
+        missing = [m for m in ("matplotlib", "scipy") if importlib.util.find_spec(m) is None]
+        if missing:
+            parser.error(f"report needs {' and '.join(missing)}: pip install 'rigid_gym[report]'")
         from rigid_gym.report import generate
 
         generate(args.out, quick=args.quick, compare=not args.no_compare)
@@ -316,6 +381,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.command == "train":
             return train(args)
+        if args.command == "sweep":
+            return sweep(args)
         if args.command == "evaluate":
             return evaluate(args)
         return record(args.env_id, args.policy, args.algo, args.episodes, args.seed, args.out,

@@ -113,6 +113,7 @@ def test_the_table_names_the_method_and_counts_demonstration_steps():
     assert minutes(runs[:2], "cpu_seconds") == "15 min"
     assert minutes(runs, "cpu_seconds") == "15 min (2 of 3 runs)"
     assert minutes(runs[2:], "cpu_seconds") == "—"
+    assert minutes([{"wall_seconds": 12.4}], "wall_seconds") == "12 s"
 
 
 def test_bc_sac_keeps_the_demonstrations_apart_and_clones_them():
@@ -147,3 +148,55 @@ def test_bc_sac_keeps_the_demonstrations_apart_and_clones_them():
     model.q_filter = True
     loss, kept = model._bc_loss()
     assert 0.0 <= kept <= 1.0 and loss.item() >= 0.0
+
+
+def test_a_run_resumes_from_its_newest_checkpoint(tmp_path):
+    import pickle
+
+    from rigid_gym.agents.train import latest_checkpoint
+
+    small = {"learning_starts": 250, "batch_size": 32}  # gradient steps only after the resume
+    seen = []
+    folder = train("rigid_gym/Stack-v0", timesteps=200, out=tmp_path, eval_freq=100,
+                   eval_episodes=1, checkpoint_freq=100, overrides=small, demonstrations=1,
+                   on_checkpoint=seen.append)
+    assert [p.name for p in seen] == ["step_100", "step_200"]
+    assert latest_checkpoint(folder) == seen[-1]
+    # only the newest checkpoint keeps the buffers: 100 demo + 200 run transitions in it
+    assert not list(seen[0].glob("*.pkl"))
+    with open(seen[-1] / "replay_buffer.pkl", "rb") as f:
+        assert pickle.load(f)["pos"] == 300
+    with pytest.raises(ValueError, match="no replay buffer"):
+        train("rigid_gym/Stack-v0", timesteps=300, out=tmp_path, resume=seen[0])
+    with pytest.raises(ValueError, match="not .*rigid_gym/Push-v0"):
+        train("rigid_gym/Push-v0", algo="bc_sac", timesteps=300, out=tmp_path, resume=seen[-1])
+
+    # a kill after the last checkpoint: the rows written since are dropped on resume
+    with open(folder / "evaluations.csv", "a") as f:
+        f.write("250,0.0,-100.0,9.9\n")
+    train("rigid_gym/Stack-v0", timesteps=300, out=tmp_path, eval_freq=100, eval_episodes=1,
+          checkpoint_freq=100, resume=latest_checkpoint(folder))
+    with open(folder / "evaluations.csv") as f:
+        assert [int(r["timesteps"]) for r in csv.DictReader(f)] == [100, 200, 300]
+    run = json.loads((folder / "run.json").read_text())
+    assert run["timesteps"] == 300 and run["resumed_at"] == [200]
+    assert run["demonstrations"]["episodes"] == 1  # not added again
+    model = load_model(folder / "model.zip", gym.make("rigid_gym/Stack-v0"))
+    assert model.num_timesteps == 300
+    with open(latest_checkpoint(folder) / "replay_buffer.pkl", "rb") as f:
+        assert pickle.load(f)["pos"] == 400  # the restored 300, then 100 more
+    with open(latest_checkpoint(folder) / "demo_buffer.pkl", "rb") as f:
+        assert pickle.load(f)["pos"] == 100  # bc_sac's demonstrations, restored
+
+
+def test_sweep_parameters_are_read_as_yaml_lists():
+    from rigid_gym.agents.sweep import parse_param, setting_label
+
+    assert parse_param("learning_rate=1e-3,3e-4") == ("learning_rate", [1e-3, 3e-4])
+    assert parse_param("policy_kwargs={net_arch: [64, 64]},{net_arch: [256]}") == (
+        "policy_kwargs", [{"net_arch": [64, 64]}, {"net_arch": [256]}])
+    assert parse_param(" q_filter = true") == ("q_filter", [True])
+    assert setting_label({"tau": 0.05, "gamma": 0.9}) == "tau=0.05 gamma=0.9"
+    for bad in ("learning_rate", "=1,2", "tau=", "tau=0.1,,0.2", "tau=[1,"):
+        with pytest.raises(ValueError, match="--param"):
+            parse_param(bad)

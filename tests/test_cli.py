@@ -143,7 +143,21 @@ def test_train_then_evaluate(tmp_path, capsys):
     assert "rigid_gym/PushDense-v0: success rate" in capsys.readouterr().out
 
 
+def test_train_resumes_from_the_newest_checkpoint(tmp_path, capsys):
+    common = ["train", "rigid_gym/Push-v0", "--out", str(tmp_path), "--eval-freq", "0",
+              "--checkpoint-freq", "50"]
+    assert main([*common, "--steps", "100"]) == 0
+    assert main([*common, "--steps", "150", "--resume"]) == 0
+    checkpoint = tmp_path / "Push-v0" / "sac-seed0" / "checkpoints" / "step_100"
+    assert f"resuming from {checkpoint}" in capsys.readouterr().out
+    assert (checkpoint.parent / "step_150" / "replay_buffer.pkl").is_file()
+
+
 @pytest.mark.parametrize("args, message", [
+    (["train", "rigid_gym/Push-v0", "--resume", "--out", "/nonexistent/runs"],
+     "--resume: no checkpoint in /nonexistent/runs/Push-v0/sac-seed0/checkpoints"),
+    (["sweep", "rigid_gym/Push-v0"], "give ENV_ID... and --seeds, or --resume"),
+    (["sweep", "rigid_gym/Push-v0", "--seeds", "0", "--param", "tau"], "--param must be KEY="),
     (["train", "rigid_gym/Push-v0", "--algo", "dqn"], "invalid choice: 'dqn'"),
     (["train", "rigid_gym/Push-v0", "--steps", "0"], "must be in [1, 1000000000], got 0"),
     (["evaluate", "missing.zip", "--env", "rigid_gym/Push-v0"], "no model file at missing.zip"),
