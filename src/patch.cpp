@@ -248,23 +248,28 @@ void apply_pair(const BodyStates& bodies, const BodyModel& model, int a, int b, 
     }
 }
 
-void spin_friction(const BodyStates& bodies, const BodyModel& model, int a, int b,
-                   Movable movable, Vec3 n, double limit) {
-    const Vec3 wa = bodies.angular_velocity[a], wb = bodies.angular_velocity[b];
-    const double spin = (wa.x - wb.x) * n.x + (wa.y - wb.y) * n.y + (wa.z - wb.z) * n.z;
+void apply_with_spin_friction(const BodyStates& bodies, const BodyModel& model, int a, int b,
+                              Movable movable, Vec3 j, Vec3 m, Vec3 ra, Vec3 rb, Vec3 n,
+                              double limit) {
+    // the relative spin about n once (j, m) has acted: omega_a + W_a (r_a x j + m) minus
+    // omega_b - W_b (r_b x j + m), so both act in one update of each body
+    Vec3 spin = sub(bodies.angular_velocity[a], bodies.angular_velocity[b]);
     double compliance = 0.0;
     if (movable.a) {
-        compliance += dot(rotate(bodies.inverse_inertia[a], n), n);
+        const Mat3& wa = bodies.inverse_inertia[a];
+        spin = add(spin, rotate(wa, add(cross(ra, j), m)));
+        compliance += dot(rotate(wa, n), n);
     }
     if (movable.b) {
-        compliance += dot(rotate(bodies.inverse_inertia[b], n), n);
+        const Mat3& wb = bodies.inverse_inertia[b];
+        spin = add(spin, rotate(wb, add(cross(rb, j), m)));
+        compliance += dot(rotate(wb, n), n);
     }
-    if (compliance <= 0.0) {
-        return;
+    if (compliance > 0.0) {
+        const double t = std::min(std::max(-dot(spin, n) / compliance, -limit), limit);
+        m = add(m, scale(t, n));
     }
-    const double t = std::min(std::max(-spin / compliance, -limit), limit);
-    apply_pair(bodies, model, a, b, movable, {0.0, 0.0, 0.0}, scale(t, n), {0.0, 0.0, 0.0},
-               {0.0, 0.0, 0.0});
+    apply_pair(bodies, model, a, b, movable, j, m, ra, rb);
 }
 
 PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int a, int b,
@@ -383,9 +388,10 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
         return unresolved;
     }
     const Vec3 j = scale(jn, s);
-    apply_pair(bodies, model, a, b, movable, j, mo, ra, rb);
     if (mu > 0.0) {
-        spin_friction(bodies, model, a, b, movable, n, mu * jn * rho);
+        apply_with_spin_friction(bodies, model, a, b, movable, j, mo, ra, rb, n, mu * jn * rho);
+    } else {
+        apply_pair(bodies, model, a, b, movable, j, mo, ra, rb);
     }
     return {APPLIED, j};
 }

@@ -67,9 +67,11 @@ Vec3 relative_point_velocity(const BodyStates& bodies, int a, int b, Vec3 ra, Ve
 void apply_pair(const BodyStates& bodies, const BodyModel& model, int a, int b, Movable movable,
                 Vec3 j, Vec3 m, Vec3 ra, Vec3 rb);
 
-// Angular impulse t n on a (and -t n on b) that stops their relative spin about n,
-// |t| <= limit (N m s): torsional friction of a patch.
-void spin_friction(const BodyStates& bodies, const BodyModel& model, int a, int b,
-                   Movable movable, Vec3 n, double limit);
+// apply_pair of (j, m) with torsional friction added to m: the angular impulse t n on a (and
+// -t n on b) that stops their relative spin about n once (j, m) has acted, |t| <= limit
+// (N m s), in the same update of each body.
+void apply_with_spin_friction(const BodyStates& bodies, const BodyModel& model, int a, int b,
+                              Movable movable, Vec3 j, Vec3 m, Vec3 ra, Vec3 rb, Vec3 n,
+                              double limit);
 
 }  // namespace rg

@@ -218,11 +218,13 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
             add_point_mass_matrix(model.inverse_mass[b], s.inverse_inertia[b], rb, k);
         }
         const Vec3 j = contact_impulse(k, v, n, e, mu);
-        apply_pair(s, model, a, b, movable, j, {0.0, 0.0, 0.0}, ra, rb);
-        record_impulse(w, set, seed, j);
         if (mu > 0.0 && radius > 0.0) {
-            spin_friction(s, model, a, b, movable, n, mu * dot(j, n) * radius);
+            apply_with_spin_friction(s, model, a, b, movable, j, {0.0, 0.0, 0.0}, ra, rb, n,
+                                     mu * dot(j, n) * radius);
+        } else {
+            apply_pair(s, model, a, b, movable, j, {0.0, 0.0, 0.0}, ra, rb);
         }
+        record_impulse(w, set, seed, j);
         applied += 1;
     }
     return applied;
