@@ -55,7 +55,7 @@ class BCSAC(SAC):
 
     def _bc_loss(self) -> tuple[th.Tensor, float]:
         """The filtered behaviour-cloning loss and the fraction of demo samples it kept."""
-        demo = self.demo_buffer.sample(self.bc_batch_size, env=self._vec_normalize_env)
+        demo = self.demo_buffer.sample(self.bc_batch_size, env=self.get_vec_normalize_env())
         action = self.actor(demo.observations, deterministic=True)
         error = ((action - demo.actions) ** 2).sum(dim=1)
         if not self.q_filter:
@@ -78,7 +78,7 @@ class BCSAC(SAC):
         use_bc = self.bc_weight > 0 and self.demo_buffer is not None and self.demo_buffer.size()
 
         for gradient_step in range(gradient_steps):
-            data = self.replay_buffer.sample(batch_size, env=self._vec_normalize_env)
+            data = self.replay_buffer.sample(batch_size, env=self.get_vec_normalize_env())
             if self.use_sde:
                 self.actor.reset_noise()
             actions_pi, log_prob = self.actor.action_log_prob(data.observations)

@@ -4,32 +4,37 @@
     evaluate("runs/Push/tqc-seed0/model.zip", episodes=100)
 
     rigid-gym evaluate runs/Push/tqc-seed0/model.zip --episodes 100
+    rigid-gym evaluate agents/models/stack_bcsac_seed0.zip --episodes 100
 
-The env id and algorithm come from the run's ``run.json`` beside the model, or are given.
+The env id and algorithm come from the model's settings file, or are given: ``run.json`` in
+the folder of a run's ``model.zip`` (``rigid-gym train`` writes it), or ``<name>.json``
+beside ``<name>.zip`` (the committed models in agents/models/).
 """
 
 from __future__ import annotations
 
-import importlib
 import json
-import zipfile
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 
 import rigid_gym  # noqa: F401  (registers the env ids)
+from rigid_gym.agents.algorithms import algorithm_of, find_algorithm
+from rigid_gym.agents.progress import bar
 
 EVAL_SEED = 1_000_000
 """Evaluation episodes use seeds EVAL_SEED, EVAL_SEED + 1, ...; training uses small seeds."""
 
 
 def success_rate(model, env: gym.Env, episodes: int, seed: int = EVAL_SEED,
-                 deterministic: bool = True) -> dict:
+                 deterministic: bool = True, progress: bool = False) -> dict:
     """Run ``model`` for ``episodes`` episodes of ``env`` on seeds ``seed``, ``seed + 1``, ...
     Success is ``info["is_success"]`` at an episode's end. Returns episodes, success_rate,
-    mean_return and std_return."""
+    mean_return and std_return. ``progress``: draw a bar of the episodes (with the success
+    rate so far) on standard error."""
     successes, returns = [], []
+    shown = bar(episodes, f"evaluating on {env.spec.id if env.spec else 'the env'}", progress)
     for k in range(episodes):
         obs, info = env.reset(seed=seed + k)
         total, done = 0.0, False
@@ -40,66 +45,50 @@ def success_rate(model, env: gym.Env, episodes: int, seed: int = EVAL_SEED,
             done = terminated or truncated
         successes.append(float(info["is_success"]))
         returns.append(total)
+        shown.update(1)
+        shown.set_postfix_str(f"success {np.mean(successes):.0%}")
+    shown.close()
     return {"episodes": episodes, "success_rate": float(np.mean(successes)),
             "mean_return": float(np.mean(returns)), "std_return": float(np.std(returns))}
 
 
-SB3_PACKAGES = ("stable_baselines3", "sb3_contrib")
-"""Where algorithm classes (SAC, TQC, PPO, ...) are looked up."""
-
-
 def load_model(path: str | Path, env: gym.Env, algo: str | None = None):
     """Load a stable-baselines3 model zip for ``env`` (HER models need their env to load).
-    ``algo``: a class name (SAC, TQC, PPO, ...), default read from the zip
-    (:func:`algorithm_of`)."""
+    ``algo``: sac, tqc, ppo, bc_sac or an SB3 class name (A2C, ...), default read from the
+    zip (:func:`algorithm_of`)."""
     if not Path(path).is_file():
         raise ValueError(f"load_model: no model file at {path}")
-    name = algo or algorithm_of(path)
-    for package in SB3_PACKAGES:
-        try:
-            module = importlib.import_module(package)
-        except ImportError:
-            continue
-        found = [attr for attr in dir(module) if attr.lower() == name.lower()]
-        if found:
-            try:
-                return getattr(module, found[0]).load(path, env=env, device="cpu")
-            except ValueError as exc:  # spaces that differ from the env's
-                raise ValueError(f"load_model: {path} does not fit "
-                                 f"{env.unwrapped.spec.id}: {exc}") from None
-    raise ValueError(f"load_model: no algorithm {name!r} in {' or '.join(SB3_PACKAGES)} (pip "
-                     "install stable-baselines3 sb3-contrib); pass a class name such as SAC")
-
-
-def algorithm_of(path: str | Path) -> str:
-    """The algorithm of a stable-baselines3 zip, from its policy class's module
-    (``stable_baselines3.sac.policies`` -> ``sac``); PPO and A2C share
-    ``stable_baselines3.common.policies`` and only PPO saves a ``clip_range``."""
+    cls = find_algorithm(algo or algorithm_of(path))
     try:
-        with zipfile.ZipFile(path) as archive:
-            data = json.loads(archive.read("data"))
-        module = data["policy_class"]["__module__"].split(".")
-        if module[1] == "common":
-            return "PPO" if "clip_range" in data else "A2C"
-        return module[1]
-    except (zipfile.BadZipFile, KeyError, ValueError, IndexError) as exc:
-        raise ValueError(f"load_model: {path} is not a stable-baselines3 model zip whose "
-                         f"algorithm can be read ({exc}); pass the algorithm") from None
+        return cls.load(path, env=env, device="cpu")
+    except ValueError as exc:  # spaces that differ from the env's
+        raise ValueError(f"load_model: {path} does not fit {env.unwrapped.spec.id}: {exc}"
+                         ) from None
 
 
-def run_metadata(path: Path) -> dict:
-    """run.json beside a model, or {} when there is none."""
-    meta = Path(path).with_name("run.json")
-    return json.loads(meta.read_text()) if meta.is_file() else {}
+def run_metadata(path: str | Path) -> dict:
+    """The settings of the model at ``path``: ``run.json`` in its folder (a run of
+    ``rigid-gym train``), else ``<name>.json`` beside ``<name>.zip`` (agents/models/), else
+    {}."""
+    path = Path(path)
+    for meta in (path.with_name("run.json"), path.with_suffix(".json")):
+        if meta.is_file():
+            return json.loads(meta.read_text())
+    return {}
 
 
 def evaluate(model_path: str | Path, env_id: str | None = None, episodes: int = 100,
-             seed: int = EVAL_SEED, algo: str | None = None, deterministic: bool = True) -> dict:
-    """Success rate and returns of a saved model over ``episodes`` seeded episodes."""
-    env_id = env_id or run_metadata(Path(model_path)).get("env_id")
+             seed: int = EVAL_SEED, algo: str | None = None, deterministic: bool = True,
+             progress: bool = False) -> dict:
+    """Success rate and returns of a saved model over ``episodes`` seeded episodes; the env
+    id and the algorithm default to the model's settings file (``run_metadata``).
+    ``progress``: draw a bar of the episodes on standard error."""
+    meta = run_metadata(model_path)
+    env_id = env_id or meta.get("env_id")
     if env_id is None:
-        raise ValueError(f"evaluate: no run.json beside {model_path}; pass the env id")
+        raise ValueError(f"evaluate: no settings beside {model_path} (run.json in its folder, "
+                         f"or {Path(model_path).with_suffix('.json').name}); pass the env id")
     env = gym.make(env_id)
-    model = load_model(model_path, env, algo)
-    result = success_rate(model, env, episodes, seed, deterministic)
+    model = load_model(model_path, env, algo or meta.get("algo"))
+    result = success_rate(model, env, episodes, seed, deterministic, progress)
     return {"env_id": env_id, **result}

@@ -42,10 +42,11 @@ from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import VecCheckNan
 
 import rigid_gym  # noqa: F401  (registers the env ids)
+from rigid_gym.agents.algorithms import algorithm_class
 from rigid_gym.agents.evaluate import success_rate
+from rigid_gym.agents.progress import bar, note
 
 HYPERPARAMS = Path(__file__).with_name("hyperparams.yml")
-ALGORITHMS = ("sac", "tqc", "ppo", "bc_sac")
 DEMO_SEED = 2_000_000
 """Demonstration episodes use seeds DEMO_SEED + 1000 * seed + rank, apart from the training seeds
 (small) and the evaluation seeds (``EVAL_SEED`` = 1,000,000 onwards)."""
@@ -66,28 +67,6 @@ def load_hyperparams(env_id: str) -> dict:
     return table[env_id]
 
 
-def algorithm_class(name: str):
-    """The SB3 class for ``name`` (sac, tqc, ppo, or bc_sac: SAC with a behaviour-cloning loss
-    on the demonstrations, ``rigid_gym.agents.bc_sac``)."""
-    if name == "bc_sac":
-        from rigid_gym.agents.bc_sac import BCSAC
-        return BCSAC
-    if name == "sac":
-        from stable_baselines3 import SAC
-        return SAC
-    if name == "ppo":
-        from stable_baselines3 import PPO
-        return PPO
-    if name == "tqc":
-        try:
-            from sb3_contrib import TQC
-        except ImportError as exc:
-            raise ValueError("train: algo 'tqc' needs sb3-contrib (pip install -e '.[train]')"
-                             ) from exc
-        return TQC
-    raise ValueError(f"train: algo must be one of {ALGORITHMS}, got {name!r}")
-
-
 def run_directory(out: Path, env_id: str, algo: str, seed: int) -> Path:
     task = env_id.split("/")[-1]
     return Path(out) / task / f"{algo}-seed{seed}"
@@ -98,7 +77,7 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
           eval_episodes: int = 20, checkpoint_freq: int = 0, progress_bar: bool = False,
           threads: int = 1, verbose: int = 0, overrides: dict | None = None,
           demonstrations: int | None = None, resume: str | Path | None = None,
-          on_checkpoint: Callable[[Path], None] | None = None) -> Path:
+          on_checkpoint: Callable[[Path], None] | None = None, progress: bool = False) -> Path:
     """Train on ``env_id`` and return the run folder (see the module docstring).
 
     algo, timesteps (env steps), n_envs: override hyperparams.yml. eval_freq: env steps between
@@ -113,6 +92,9 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     files, trained on to ``timesteps`` in all (not bit-identical to a run never stopped: the
     envs start afresh).
     on_checkpoint: called with each checkpoint's folder once it is complete.
+    progress: say on standard error what the run is doing (making the envs and the model,
+    the demonstrations and each evaluation with a bar of their episodes); the training
+    steps' own bar is ``progress_bar`` (SB3's).
     """
     import torch
 
@@ -136,6 +118,8 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     folder.mkdir(parents=True, exist_ok=True)
     if resume is not None:
         record = _restore_files(Path(resume), folder, env_id, algo, seed)
+    note(f"{env_id}: making {n_envs} env(s) and the {algo} model (run folder {folder})",
+         progress)
     env = make_vec_env(env_id, n_envs=n_envs, seed=seed, monitor_dir=str(folder),
                        monitor_kwargs={"info_keywords": ("is_success",),
                                        "override_existing": resume is None})
@@ -153,7 +137,8 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
             kwargs.update(replay_buffer_class=HerReplayBuffer,
                           replay_buffer_kwargs=dict(settings["her"]))
         model = cls("MultiInputPolicy", env, seed=seed, verbose=verbose, **kwargs)
-        demo = add_demonstrations(model, env_id, demonstrations, seed) if demonstrations else None
+        demo = add_demonstrations(model, env_id, demonstrations, seed, progress) \
+            if demonstrations else None
         _write_run(folder, env_id, algo, seed, timesteps, n_envs, kwargs, demo)
 
     before = record if resume is not None else {}  # the seconds of the parts before a resume
@@ -161,10 +146,13 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     callbacks = []
     if eval_freq:
         callbacks.append(SuccessEvaluation(env_id, folder / "evaluations.csv", eval_freq,
-                                           eval_episodes, clock, append=resume is not None))
+                                           eval_episodes, clock, append=resume is not None,
+                                           progress=progress))
     checkpoints = Checkpoints(folder, checkpoint_freq, clock, on_checkpoint) \
         if checkpoint_freq else None
     callbacks += [checkpoints] if checkpoints else []
+    note(f"{env_id}: training {algo} for {max(0, timesteps - model.num_timesteps):,} env steps",
+         progress)
     model.learn(max(0, timesteps - model.num_timesteps), callback=CallbackList(callbacks),
                 progress_bar=progress_bar, reset_num_timesteps=resume is None)
     model.save(folder / "model.zip")
@@ -202,7 +190,8 @@ def _count(value, name: str, low: int) -> int:
     return int(value)
 
 
-def add_demonstrations(model, env_id: str, episodes: int, seed: int) -> dict:
+def add_demonstrations(model, env_id: str, episodes: int, seed: int,
+                       progress: bool = False) -> dict:
     """Put ``episodes`` episodes of the scripted policy (``rigid_gym.envs.scripted``) into
     ``model``'s replay buffer, as SB3 stores its own transitions, and return
     ``{"episodes", "env_steps", "success_rate"}``.
@@ -212,7 +201,7 @@ def add_demonstrations(model, env_id: str, episodes: int, seed: int) -> dict:
     never solves (Stack); the learner still has to work out the values and the policy itself.
     Their env steps count towards a run's total in the results table. A model with a
     ``make_demo_buffer`` method (bc_sac) also gets them in a buffer of their own, for its
-    behaviour-cloning loss.
+    behaviour-cloning loss. ``progress``: draw a bar of the episodes on standard error.
     """
     from rigid_gym.envs.scripted import scripted_policy
 
@@ -225,6 +214,7 @@ def add_demonstrations(model, env_id: str, episodes: int, seed: int) -> dict:
         length = gym.spec(env_id).max_episode_steps
         buffers.append(model.make_demo_buffer((episodes + n_envs) * length))
     finished, successes, steps = 0, 0.0, 0
+    shown = bar(episodes, f"{env_id}: scripted demonstrations", progress)
     while finished < episodes:
         actions = np.stack([policy({key: value[i] for key, value in obs.items()})
                             for i, policy in enumerate(policies)]).astype(np.float32)
@@ -237,6 +227,8 @@ def add_demonstrations(model, env_id: str, episodes: int, seed: int) -> dict:
         for buffer in buffers:
             buffer.add(obs, stored, model.policy.scale_action(actions), rewards, dones, infos)
         obs, finished, steps = next_obs, finished + int(dones.sum()), steps + n_envs
+        shown.update(int(dones.sum()))
+    shown.close()
     env.close()
     return {"episodes": finished, "env_steps": steps, "success_rate": successes / finished}
 
@@ -277,13 +269,14 @@ class EveryNSteps(BaseCallback):
 class SuccessEvaluation(EveryNSteps):
     """Every ``every`` env steps, and at the end of training, evaluate the deterministic policy
     on fixed seeds and append (timesteps, success_rate, mean_return, wall_seconds of the run)
-    to ``path``; ``append``: keep the rows already there (a resumed run)."""
+    to ``path``; ``append``: keep the rows already there (a resumed run); ``progress``: draw
+    a bar of each evaluation's episodes."""
 
     def __init__(self, env_id: str, path: Path, every: int, episodes: int, clock: Clock,
-                 append: bool = False):
+                 append: bool = False, progress: bool = False):
         super().__init__(every)
         self.env = gym.make(env_id)
-        self.path, self.episodes, self.clock = path, episodes, clock
+        self.path, self.episodes, self.clock, self.progress = path, episodes, clock, progress
         if not append:
             with open(path, "w", newline="") as f:
                 csv.writer(f).writerow(["timesteps", "success_rate", "mean_return",
@@ -298,7 +291,7 @@ class SuccessEvaluation(EveryNSteps):
             self.act()
 
     def act(self) -> None:
-        result = success_rate(self.model, self.env, self.episodes)
+        result = success_rate(self.model, self.env, self.episodes, progress=self.progress)
         row = [self.num_timesteps, result["success_rate"], result["mean_return"],
                self.clock.seconds()["wall_seconds"]]
         with open(self.path, "a", newline="") as f:

@@ -7,7 +7,9 @@ SB3 expects same-step autoreset with the episode's last observation in
 ``info["terminal_observation"]`` and ``info["TimeLimit.truncated"]``: the rigid_gym vector envs
 reset the same way (``AutoresetMode.SAME_STEP``), and this adapter only reshapes their results
 into SB3's per-env info dicts. HER's ``env_method("compute_reward", ...)`` calls the task's
-vectorised ``compute_reward``.
+vectorised ``compute_reward``. The copies of a rigid_gym vector env are one batch, not env
+objects: ``get_attr``, ``set_attr`` and ``env_method`` reach the vector env itself (the same
+for every index), whose ``compute_reward`` takes any batch of goals.
 """
 
 from __future__ import annotations
@@ -28,27 +30,32 @@ class SB3VecEnv(VecEnv):
             raise ValueError(f"SB3VecEnv: the vector env must autoreset in the same step "
                              f"(AutoresetMode.SAME_STEP), got {mode!r}")
         self.venv = venv
+        self.next_seeds: list | None = None
+        """The seeds of the next reset (``seed``), one per env, or None."""
         super().__init__(venv.num_envs, venv.single_observation_space,
                          venv.single_action_space)
-        self._actions: np.ndarray | None = None
+        self.actions: np.ndarray | None = None
+
+    def seed(self, seed: int | None = None) -> list:
+        """As SB3's: env i gets ``seed + i`` (a random seed when None) at the next reset."""
+        self.next_seeds = list(super().seed(seed))
+        return self.next_seeds
 
     def reset(self):
-        seeds = self._seeds if any(s is not None for s in self._seeds) else None
-        observation, infos = self.venv.reset(seed=seeds)
-        self.reset_infos = self._split(infos)
-        self._reset_seeds()
-        self._reset_options()
+        observation, infos = self.venv.reset(seed=self.next_seeds)
+        self.reset_infos = self.split(infos)
+        self.next_seeds = None
         return observation
 
     def step_async(self, actions: np.ndarray) -> None:
-        self._actions = actions
+        self.actions = actions
 
     def step_wait(self):
-        observation, rewards, terminated, truncated, infos = self.venv.step(self._actions)
-        per_env = self._split(infos)
+        observation, rewards, terminated, truncated, infos = self.venv.step(self.actions)
+        per_env = self.split(infos)
         dones = terminated | truncated
         if dones.any():  # the ended episodes' last infos, as SB3 expects
-            final = self._split(infos["final_info"])
+            final = self.split(infos["final_info"])
             for i in np.flatnonzero(dones):
                 per_env[i] = {**final[i], "terminal_observation": infos["final_obs"][i]}
         for i, info in enumerate(per_env):
@@ -59,20 +66,25 @@ class SB3VecEnv(VecEnv):
         self.venv.close()
 
     def get_attr(self, attr_name: str, indices=None) -> list[Any]:
-        return [getattr(self.venv.envs[i], attr_name) for i in self._get_indices(indices)]
+        return [getattr(self.venv.unwrapped, attr_name) for _ in self.indices(indices)]
 
     def set_attr(self, attr_name: str, value: Any, indices=None) -> None:
-        for i in self._get_indices(indices):
-            setattr(self.venv.envs[i], attr_name, value)
+        setattr(self.venv.unwrapped, attr_name, value)  # one batch: every index at once
 
     def env_method(self, method_name: str, *method_args, indices=None, **method_kwargs) -> list[Any]:
-        return [getattr(self.venv.envs[i], method_name)(*method_args, **method_kwargs)
-                for i in self._get_indices(indices)]
+        method = getattr(self.venv.unwrapped, method_name)
+        return [method(*method_args, **method_kwargs) for _ in self.indices(indices)]
 
     def env_is_wrapped(self, wrapper_class, indices=None) -> list[bool]:
-        return [False for _ in self._get_indices(indices)]
+        return [False for _ in self.indices(indices)]
 
-    def _split(self, infos: dict) -> list[dict]:
+    def indices(self, indices) -> list[int]:
+        """SB3's ``indices`` (None: every env, an int, or a sequence) as a list."""
+        if indices is None:
+            return list(range(self.num_envs))
+        return [indices] if isinstance(indices, int) else list(indices)
+
+    def split(self, infos: dict) -> list[dict]:
         """Gymnasium's batched info dict (arrays with "_key" masks) -> one dict per env."""
         per_env = [{} for _ in range(self.num_envs)]
         for key, values in infos.items():

@@ -1,4 +1,4 @@
-"""The floating suction gripper every task is driven through.
+"""The floating suction gripper every task is driven through, one per world of a World.
 
 The gripper is a kinematic body (a flat box, infinite mass): each env step the action sets its
 velocity, and the solver moves it and lets it push whatever it meets. Two things are not
@@ -32,6 +32,9 @@ PAD_HALF_EXTENTS = (0.02, 0.02, 0.015)
 """Half extents (m) of the gripper's pad."""
 GRIP_MARGIN = 0.004
 """m: how close the pad must be to an object for suction to grip it."""
+REACH_SLACK = 1e-3
+"""m added to the distance within which a grip is looked for, so that rounding never hides a
+contact (``SuctionGripper.grip``)."""
 
 
 @dataclass(frozen=True)
@@ -41,17 +44,15 @@ class Workspace:
     low: tuple[float, float, float] = (-0.25, -0.25, PAD_HALF_EXTENTS[2])
     high: tuple[float, float, float] = (0.25, 0.25, 0.3)
 
-    def clip(self, position: np.ndarray) -> np.ndarray:
-        """position (..., 3) m, each axis clipped to [low, high] (without np.clip's
-        argument checks, ~3x the cost on a 3-vector)."""
-        return np.minimum(np.maximum(position, self.low), self.high)
-
 
 class SuctionGripper:
-    """Drives body ``body`` of a world (a kinematic Box of ``PAD_HALF_EXTENTS``).
+    """Drives body ``body`` (a kinematic Box of ``PAD_HALF_EXTENTS``) in every world of
+    ``world`` (a World, batched or not: its ``state`` arrays have a leading world axis B).
 
     objects: indices of the dynamic bodies it may push and grip, each a Box; ``half_extents``
-        (k, 3) m their sizes. ``step_time``: s per env step.
+        (k, 3) m their sizes (the same in every world). ``step_time``: s per env step.
+    ``held`` (B,) int64: the object each world's gripper holds (an index into ``objects``),
+    -1 for none.
     """
 
     shape = Box(PAD_HALF_EXTENTS)
@@ -60,95 +61,84 @@ class SuctionGripper:
                  workspace: Workspace = Workspace()):
         self.world = world
         self.body = body
-        self.objects = list(objects)
+        self.objects = np.asarray(objects, dtype=np.int64)
         self.half_extents = np.asarray(half_extents, dtype=np.float64).reshape(-1, 3)
         self.step_time = step_time
         self.workspace = workspace
-        self.held: int | None = None  # index into self.objects
+        self.held = np.full(world.num_worlds, -1, dtype=np.int64)
         k = len(self.objects)
-        # lowest_centres' work arrays: the pad and the held object, the objects
-        self._work = (np.empty((2, 3)), np.empty((2, 3, 3)), np.empty((2, 3)), np.empty((k, 3)),
-                      np.empty((k, 3, 3)))
+        # what every command passes to numpy and the core, made once: the workspace as (1, 3)
+        # arrays (numpy converts a tuple anew at every call, and a (B, 3) array against a
+        # (1, 3) one takes its fast path: half the time of one against a (3,)), the pad's
+        # size, lowest_centres' work arrays (the pad and the held object, then the objects)
+        # and its output
+        self.low, self.high = np.array([workspace.low]), np.array([workspace.high])
+        self.pad_half = np.array(PAD_HALF_EXTENTS)
+        self.work = (np.empty((2, 3)), np.empty((2, 3, 3)), np.empty((2, 3)), np.empty((k, 3)),
+                     np.empty((k, 3, 3)))
+        self.lowest = np.empty(world.num_worlds)
+        # a contact within GRIP_MARGIN needs the centres within the two bounding spheres
+        reach = (np.linalg.norm(self.pad_half) + np.linalg.norm(self.half_extents, axis=1)
+                 + GRIP_MARGIN + REACH_SLACK)
+        self.reach_squared = reach * reach
 
     @property
     def position(self) -> np.ndarray:
-        return self.world.position[self.body]
+        """The pad's centre, m: (3,) for an unbatched World, (B, 3) for a batched one."""
+        return self.world.position[..., self.body, :]
 
     @property
     def velocity(self) -> np.ndarray:
-        return self.world.velocity[self.body]
+        """The pad's velocity, m/s, shaped as ``position``."""
+        return self.world.velocity[..., self.body, :]
 
-    def command(self, motion: np.ndarray, grip: float | None) -> None:
-        """Start an env step: ``motion`` (3,) in [-1, 1] scales ``STEP_DISTANCE``; ``grip`` > 0
-        closes the suction, <= 0 opens it, None leaves it (tasks without a grip)."""
-        target = self.workspace.clip(self.position + STEP_DISTANCE * motion)
-        target[2] = max(target[2], min(self.position[2], self._lowest_centre(target)))
-        velocity = (target - self.position) / self.step_time
-        self.world.set_velocity(self.body, velocity=velocity)  # it never turns: omega stays 0
-        self._grip(grip)
+    def command(self, motions: np.ndarray, grips: np.ndarray | None) -> None:
+        """Start an env step in every world: ``motions`` (B, 3) in [-1, 1] scale
+        ``STEP_DISTANCE``; ``grips`` (B,): > 0 closes the suction, <= 0 opens it; None
+        (tasks without a grip) leaves it open."""
+        s = self.world.state
+        position = s.position[:, self.body]
+        target = np.minimum(np.maximum(position + STEP_DISTANCE * motions, self.low), self.high)
+        lowest_centres(target, s.position, s.rotation, self.body, self.pad_half, self.objects,
+                       self.half_extents, self.held, *self.work, self.lowest)
+        target[:, 2] = np.maximum(target[:, 2], np.minimum(position[:, 2], self.lowest))
+        # written into the state as World.set_velocity would (it never turns: omega stays 0),
+        # without its checks: the target is finite by construction
+        s.velocity[:, self.body] = (target - position) / self.step_time
+        if grips is not None:
+            self.grip(grips)
 
-    # -- helpers -------------------------------------------------------------------------------
+    def grip(self, grips: np.ndarray) -> None:
+        """After the pad's velocity is set: in the worlds where ``grips`` (B,) > 0 and
+        nothing is held, attach the first object the pad touches (if any); where
+        ``grips`` <= 0 and an object is held, release it (with the pad's new velocity)."""
+        changing = np.flatnonzero((grips > 0.0) != (self.held >= 0))
+        if not changing.size:
+            return
+        holding = self.held[changing] >= 0
+        for world in changing[holding].tolist():
+            self.world.detach(int(self.objects[self.held[world]]), world=world)
+            self.held[world] = -1
+        closing = changing[~holding]
+        if closing.size:  # the contact query only where an object is within reach
+            s = self.world.state
+            offsets = s.position[closing][:, self.objects] - s.position[closing, self.body][:, None]
+            near = np.einsum("wki,wki->wk", offsets, offsets) <= self.reach_squared
+            for world in closing[near.any(axis=1)].tolist():
+                self.attach_touching(world)
 
-    def _grip(self, grip: float | None) -> None:
-        """After the pad's velocity is set: ``grip`` > 0 closes the suction, <= 0 opens it,
-        None leaves it."""
-        if grip is not None and grip > 0.0 and self.held is None:
-            self._try_grip()
-        elif grip is not None and grip <= 0.0 and self.held is not None:
-            self.world.detach(self.objects[self.held])  # leaves with the pad's new velocity
-            self.held = None
-
-    def _try_grip(self) -> None:
-        contacts = self.world.contacts(margin=GRIP_MARGIN)
-        for k, body in enumerate(self.objects):
-            pair = ((contacts.body_a == body) & (contacts.body_b == self.body)) | (
-                (contacts.body_a == self.body) & (contacts.body_b == body))
-            if np.any(pair):
-                self.world.attach(body, self.body)  # carried from now on (World.attach)
-                self.held = k
+    def attach_touching(self, world: int) -> None:
+        """In ``world``, attach the first object (in ``objects``' order) with a contact
+        within GRIP_MARGIN of the pad, if there is one (carried from now on: World.attach)."""
+        contacts = self.world.contacts(margin=GRIP_MARGIN, world=world)
+        a, b = contacts.body_a, contacts.body_b
+        for k, body in enumerate(self.objects.tolist()):
+            if np.any(((a == body) & (b == self.body)) | ((a == self.body) & (b == body))):
+                self.world.attach(body, self.body, world=world)
+                self.held[world] = k
                 return
 
-    def _lowest_centre(self, target: np.ndarray) -> float:
-        """The lowest z the gripper's centre may take at ``target``'s x, y: where it, or the
-        object it holds, would rest on the table or on the top of a free object under it
-        (``src/footprint.h``; one world of ``_lowest_centres``)."""
-        lowest = np.empty(1)
-        _lowest_centres(self, target[None], self.world.position[None],
-                        self.world.rotation[None], [self.held], lowest)
-        return float(lowest[0])
-
-
-def command_all(world, grippers: list[SuctionGripper], motions: np.ndarray,
-                grips: np.ndarray | None) -> None:
-    """``SuctionGripper.command`` for gripper i of world i of a batched ``world``, for all of
-    them at once (the same arithmetic, so each world moves exactly as a single env's would):
-    motions (B, 3) in [-1, 1], grips (B,) or None (tasks without a grip). The grippers drive
-    the same body and boxes in every world (a vector env's copies), and share a workspace."""
-    first = grippers[0]
-    body = first.body
-    s = world.state
-    position = s.position[:, body]
-    target = first.workspace.clip(position + STEP_DISTANCE * motions)
-    lowest = np.empty(len(grippers))
-    # without a grip command nothing is ever held: no need to ask every gripper
-    held = None if grips is None else [g.held for g in grippers]
-    _lowest_centres(first, target, s.position, s.rotation, held, lowest)
-    target[:, 2] = np.maximum(target[:, 2], np.minimum(position[:, 2], lowest))
-    s.velocity[:, body] = (target - position) / first.step_time  # it never turns
-    if grips is not None:
-        for gripper, grip in zip(grippers, grips):
-            gripper._grip(grip)
-
-
-def _lowest_centres(first: SuctionGripper, targets: np.ndarray, positions: np.ndarray,
-                    rotations: np.ndarray, held: list | None, out: np.ndarray) -> None:
-    """``SuctionGripper._lowest_centre`` of the gripper of world i at targets[i] (B, 3) m in
-    world i of positions (B, n, 3) and rotations (B, n, 3, 3), into out (B,) m; every world's
-    gripper drives the same body and objects as ``first``. held: each gripper's held object
-    (an index into its objects, or None), or None when none holds anything
-    (``src/footprint.h``)."""
-    held = (np.full(len(out), -1, dtype=np.int64) if held is None else
-            np.array([-1 if h is None else h for h in held], dtype=np.int64))
-    lowest_centres(targets, positions, rotations, first.body, np.array(PAD_HALF_EXTENTS),
-                   np.asarray(first.objects, dtype=np.int64), first.half_extents, held,
-                   *first._work, out)
+    def forget(self, worlds) -> None:
+        """Nothing is held any more in ``worlds`` (an index array, or slice(None)): their
+        World was reset, which detaches every body."""
+        self.held[worlds] = -1

@@ -6,13 +6,39 @@ import functools
 
 import numpy as np
 
-from rigid_gym.envs.base import MARKER_ALPHA, DISTANCE_THRESHOLD, RigidGymEnv, sample_apart
 from rigid_gym.meshes import prism_mesh
+from rigid_gym.recordable import Marker
+from rigid_gym.envs.base import RigidGymEnv
+from rigid_gym.envs.task import (DISTANCE_THRESHOLD, GOAL_COLOR, MARKER_ALPHA, Task, cube_anywhere,
+                                 distance, sample_apart)
 
 OBJECT_RANGE = 0.15
 """m: the cube starts at x, y uniform in [-0.15, 0.15] (panda-gym's and Fetch's range)."""
 GOAL_RANGE = 0.15
 """m: the target is at x, y uniform in [-0.15, 0.15], on the table."""
+
+
+class Push(Task):
+    """The cube starts anywhere in the range, the target at least a threshold away on the
+    table; reached within DISTANCE_THRESHOLD."""
+
+    num_cubes = 1
+    has_grip = False
+    goal_size = 3
+
+    def place_cubes(self, rngs, half):
+        return cube_anywhere(rngs, half, OBJECT_RANGE)
+
+    def sample_goals(self, rngs, starts, half, places):
+        xy = np.array([sample_apart(rng, GOAL_RANGE, [cube], DISTANCE_THRESHOLD)
+                       for rng, cube in zip(rngs, starts[:, 0])])
+        return np.concatenate([xy, half[:, :1]], axis=1)
+
+    def goal_reached(self, achieved_goal, desired_goal):
+        return distance(achieved_goal - desired_goal) < DISTANCE_THRESHOLD
+
+    def markers(self, goal, half):
+        return [Marker(success_zone(), (goal[0], goal[1], 0.0), GOAL_COLOR, MARKER_ALPHA)]
 
 
 class PushEnv(RigidGymEnv):
@@ -56,25 +82,7 @@ class PushEnv(RigidGymEnv):
     {arguments}
     """
 
-    num_cubes = 1
-    has_grip = False
-    goal_size = 3
-
-    def _place_cubes(self, half):
-        xy = self.np_random.uniform(-OBJECT_RANGE, OBJECT_RANGE, size=2)
-        return [(xy[0], xy[1], half[0])]
-
-    def _sample_goal(self):
-        cube = self.world.position[self.cubes[0]]
-        xy = sample_apart(self.np_random, GOAL_RANGE, [cube], DISTANCE_THRESHOLD)
-        return np.array([xy[0], xy[1], self.cube_half[0]])
-
-    def goal_reached(self, achieved_goal, desired_goal):
-        return np.linalg.norm(achieved_goal - desired_goal, axis=-1) < DISTANCE_THRESHOLD
-
-    def _add_markers(self, renderer):
-        renderer.add_marker(success_zone(), (self.goal[0], self.goal[1], 0.0), (0.2, 0.8, 0.3),
-                            MARKER_ALPHA)
+    task = Push()
 
 
 @functools.cache

@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigid_gym.envs.base import CUBE_HALF, FRICTION, OBJECT_FEATURES, STEP_TIME, RigidGymEnv
+from rigid_gym.envs.base import RigidGymEnv
 from rigid_gym.envs.effector import PAD_HALF_EXTENTS, STEP_DISTANCE
+from rigid_gym.envs.task import CUBE_HALF, FRICTION, OBJECT_FEATURES, STEP_TIME
 
 PAD_HALF_HEIGHT = PAD_HALF_EXTENTS[2]
 CRUISE_HEIGHT = 0.12

@@ -4,8 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigid_gym.envs.base import MARKER_ALPHA, CUBE_HALF, DISTANCE_THRESHOLD, RigidGymEnv, sample_apart
+from rigid_gym.recordable import Marker
+from rigid_gym.render import DYNAMIC_PALETTE
 from rigid_gym.shapes import Box
+from rigid_gym.envs.base import RigidGymEnv
+from rigid_gym.envs.task import (CUBE_HALF, DISTANCE_THRESHOLD, MARKER_ALPHA, Task, distance,
+                                 sample_apart)
 
 OBJECT_RANGE = 0.15
 """m: each cube starts at x, y uniform in [-0.15, 0.15]."""
@@ -15,6 +19,48 @@ TOWER_RANGE = 0.15
 """m: the tower's x, y are uniform in [-0.15, 0.15] ..."""
 TOWER_CLEARANCE = 0.08
 """m: ... and at least this far from both cubes' starts."""
+
+
+class Stack(Task):
+    """Two cubes apart on the table; the target is a tower (cube 1 on cube 0) away from both;
+    reached when both cubes are near their targets and placed as the targets are."""
+
+    num_cubes = 2
+    has_grip = True
+    goal_size = 6
+
+    def place_cubes(self, rngs, half):
+        starts = np.zeros((len(rngs), 2, 3))
+        for k, rng in enumerate(rngs):
+            starts[k, 0, :2] = rng.uniform(-OBJECT_RANGE, OBJECT_RANGE, size=2)
+            starts[k, 1, :2] = sample_apart(rng, OBJECT_RANGE, [starts[k, 0]], CUBE_SPACING)
+        starts[:, :, 2] = half
+        return starts
+
+    def sample_goals(self, rngs, starts, half, places):
+        xy = np.array([sample_apart(rng, TOWER_RANGE, cubes, TOWER_CLEARANCE)
+                       for rng, cubes in zip(rngs, starts)])
+        bottom, top = half[:, 0], half[:, 1]
+        return np.column_stack([xy, bottom, xy, 2.0 * bottom + top])
+
+    def goal_reached(self, achieved_goal, desired_goal):
+        error = achieved_goal - desired_goal
+        near = ((distance(error[..., :3]) < DISTANCE_THRESHOLD)
+                & (distance(error[..., 3:]) < DISTANCE_THRESHOLD))
+        # the cubes' relative placement matches the target's: for a target tower (cube 1 one
+        # edge above cube 0) this says cube 1 rests on cube 0. Comparing with the target's
+        # placement, not with a fixed tower, keeps goals that HER relabels from where the
+        # cubes ended up (lying apart) reachable; a fixed tower test made them all failures.
+        mismatch = ((achieved_goal[..., 3:] - achieved_goal[..., :3])
+                    - (desired_goal[..., 3:] - desired_goal[..., :3]))
+        same_shape = ((distance(mismatch[..., :2]) < CUBE_HALF)
+                      & (np.abs(mismatch[..., 2]) < 0.5 * CUBE_HALF))
+        return near & same_shape
+
+    def markers(self, goal, half):
+        # each target in its cube's colour
+        return [Marker(Box((h, h, h)), tuple(goal[3 * k:3 * k + 3]), color, MARKER_ALPHA)
+                for k, (h, color) in enumerate(zip(half.tolist(), DYNAMIC_PALETTE))]
 
 
 class StackEnv(RigidGymEnv):
@@ -60,38 +106,4 @@ class StackEnv(RigidGymEnv):
     {arguments}
     """
 
-    num_cubes = 2
-    has_grip = True
-    goal_size = 6
-
-    def _place_cubes(self, half):
-        first = self.np_random.uniform(-OBJECT_RANGE, OBJECT_RANGE, size=2)
-        second = sample_apart(self.np_random, OBJECT_RANGE, [first], CUBE_SPACING)
-        return [(first[0], first[1], half[0]), (second[0], second[1], half[1])]
-
-    def _sample_goal(self):
-        starts = [self.world.position[c] for c in self.cubes]
-        x, y = sample_apart(self.np_random, TOWER_RANGE, starts, TOWER_CLEARANCE)
-        bottom, top = self.cube_half
-        return np.array([x, y, bottom, x, y, 2.0 * bottom + top])
-
-    def goal_reached(self, achieved_goal, desired_goal):
-        error = achieved_goal - desired_goal
-        near = ((np.linalg.norm(error[..., :3], axis=-1) < DISTANCE_THRESHOLD)
-                & (np.linalg.norm(error[..., 3:], axis=-1) < DISTANCE_THRESHOLD))
-        # the cubes' relative placement matches the target's: for a target tower (cube 1 one
-        # edge above cube 0) this says cube 1 rests on cube 0. Comparing with the target's
-        # placement, not with a fixed tower, keeps goals that HER relabels from where the
-        # cubes ended up (lying apart) reachable; a fixed tower test made them all failures.
-        mismatch = ((achieved_goal[..., 3:] - achieved_goal[..., :3])
-                    - (desired_goal[..., 3:] - desired_goal[..., :3]))
-        same_shape = ((np.linalg.norm(mismatch[..., :2], axis=-1) < CUBE_HALF)
-                      & (np.abs(mismatch[..., 2]) < 0.5 * CUBE_HALF))
-        return near & same_shape
-
-    def _add_markers(self, renderer):
-        from rigid_gym.render import DYNAMIC_PALETTE  # each target in its cube's colour
-
-        for k, color in enumerate(DYNAMIC_PALETTE[:2]):
-            h = self.cube_half[k]
-            renderer.add_marker(Box((h, h, h)), self.goal[3 * k:3 * k + 3], color, MARKER_ALPHA)
+    task = Stack()

@@ -6,8 +6,10 @@ import functools
 
 import numpy as np
 
-from rigid_gym.envs.base import MARKER_ALPHA, RigidGymEnv
+from rigid_gym.recordable import Marker
 from rigid_gym.shapes import Box, Compound, Pose, Sphere
+from rigid_gym.envs.base import RigidGymEnv
+from rigid_gym.envs.task import GOAL_COLOR, MARKER_ALPHA, Task, cube_anywhere
 
 OBJECT_RANGE = 0.1
 """m: the cube starts at x, y uniform in [-0.1, 0.1]."""
@@ -39,6 +41,42 @@ def bin_shape() -> Compound:
             centre[axis] = sign * a
             parts.append((Box(tuple(half)), Pose(centre)))
     return Compound(tuple(parts))
+
+
+class Throw(Task):
+    """The cube starts near the middle, the bin beyond the gripper's reach; reached when the
+    cube lies in the bin."""
+
+    num_cubes = 1
+    has_grip = True
+    goal_size = 3
+    num_fixtures = 1
+    camera_view = ((0.2, -0.8, 0.8), (0.26, 0.0, 0.02), 42.0)
+
+    def place_cubes(self, rngs, half):
+        return cube_anywhere(rngs, half, OBJECT_RANGE)
+
+    def place_fixtures(self, rngs):
+        places = np.zeros((len(rngs), 1, 3))
+        for k, rng in enumerate(rngs):
+            places[k, 0, 0] = rng.uniform(*BIN_X)
+            places[k, 0, 1] = rng.uniform(*BIN_Y)
+        return places
+
+    def add_fixtures(self, scene):
+        return [scene.add_body(bin_shape(), static=True, friction=BIN_FRICTION, name="bin")]
+
+    def sample_goals(self, rngs, starts, half, places):
+        # the bin's centre at the height of a cube resting in it
+        return places[:, 0] + np.column_stack([np.zeros((len(half), 2)), half[:, 0]])
+
+    def goal_reached(self, achieved_goal, desired_goal):
+        error = np.abs(achieved_goal - desired_goal)
+        return ((error[..., 0] <= BIN_INNER_HALF) & (error[..., 1] <= BIN_INNER_HALF)
+                & (error[..., 2] <= IN_BIN_HEIGHT))
+
+    def markers(self, goal, half):
+        return [Marker(Sphere(0.015), tuple(goal), GOAL_COLOR, MARKER_ALPHA)]
 
 
 class ThrowEnv(RigidGymEnv):
@@ -92,32 +130,4 @@ class ThrowEnv(RigidGymEnv):
     {arguments}
     """
 
-    num_cubes = 1
-    has_grip = True
-    goal_size = 3
-    camera_view = ((0.2, -0.8, 0.8), (0.26, 0.0, 0.02), 42.0)
-
-    def _place_cubes(self, half):
-        xy = self.np_random.uniform(-OBJECT_RANGE, OBJECT_RANGE, size=2)
-        return [(xy[0], xy[1], half[0])]
-
-    def _place_fixtures(self):
-        x = self.np_random.uniform(*BIN_X)
-        y = self.np_random.uniform(*BIN_Y)
-        self.bin_centre = np.array([x, y, 0.0])
-        return [self.bin_centre]
-
-    def _add_fixtures(self, scene, places):
-        return [scene.add_body(bin_shape(), static=True, position=places[0],
-                               friction=BIN_FRICTION, name="bin")]
-
-    def _sample_goal(self):
-        return self.bin_centre + np.array([0.0, 0.0, self.cube_half[0]])
-
-    def goal_reached(self, achieved_goal, desired_goal):
-        error = np.abs(achieved_goal - desired_goal)
-        return ((error[..., 0] <= BIN_INNER_HALF) & (error[..., 1] <= BIN_INNER_HALF)
-                & (error[..., 2] <= IN_BIN_HEIGHT))
-
-    def _add_markers(self, renderer):
-        renderer.add_marker(Sphere(0.015), self.goal, (0.2, 0.8, 0.3), MARKER_ALPHA)
+    task = Throw()

@@ -1,11 +1,11 @@
-"""Natively batched tasks: B copies of a task in one batched World.
+"""Natively batched tasks: a Gymnasium VectorEnv over a batch of B copies (``envs/core.py``).
 
     envs = gym.make_vec("rigid_gym/Push-v0", num_envs=256)   # registered vector_entry_point
 
-Every copy is the task's own env class (the same gripper, observations, rewards and seeding),
-but their worlds are the worlds of one ``World(num_worlds=B)``: the solver steps all of them in
-one kernel call, in parallel over worlds. Stepping copy i gives bit-identical results to a
-single env reset with the same seed (``tests/test_vector.py``).
+The copies are the task's own (the same gripper, observations, rewards and seeding as
+``gym.make``'s env, which is the same core with B = 1), in one ``World(num_worlds=B)``: the
+solver steps all of them in one call, in parallel over worlds. Copy i of ``reset(seed=s)``
+plays exactly what a single env reset with seed s + i plays (``tests/test_vector.py``).
 
 Autoreset is ``SAME_STEP``: an episode that ends is reset within the same ``step``, whose
 observation is then the new episode's first; the last one is in ``infos["final_obs"]`` and its
@@ -17,26 +17,21 @@ The worlds share their geometry, so cube sizes cannot be randomized per copy.
 from __future__ import annotations
 
 import numpy as np
+from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from rigid_gym.envs.base import (
-    SOLVER_STEPS,
-    STEP_TIME,
-    RigidGymEnv,
-    observations_from,
-    observe,
-    real_array,
-)
-from rigid_gym.envs.effector import command_all
+from rigid_gym.envs.base import RigidGymEnv, task_spaces
+from rigid_gym.envs.core import ALL, TaskBatch
+from rigid_gym.envs.options import Options, checked_actions
 from rigid_gym.envs.push import PushEnv
 from rigid_gym.envs.stack import StackEnv
+from rigid_gym.envs.task import CUBE_HALF
 from rigid_gym.envs.throw import ThrowEnv
-from rigid_gym.world import World
 
 
 class RigidGymVectorEnv(VectorEnv):
-    """``num_envs`` copies of ``env_class`` (a RigidGymEnv task) in one batched World.
+    """``num_envs`` copies of ``env_class``'s task (a RigidGymEnv class) in one batched World.
 
     kwargs: the task's constructor arguments (``render_mode`` must be None; ``randomize``
     may not name ``size``).
@@ -62,26 +57,27 @@ class RigidGymVectorEnv(VectorEnv):
             raise ValueError(f"{name}: the copies share one geometry, so randomize cannot include "
                              "'size'; pass a dict of the other ranges (mass, friction, "
                              "restitution)")
-        self.envs = [env_class(**kwargs) for _ in range(num_envs)]
-        first = self.envs[0]
-        first.reset(seed=0)  # builds the scene every copy's world starts from
-        self.world = World(first.scene, dt=STEP_TIME / SOLVER_STEPS, num_worlds=int(num_envs))
-        for index, env in enumerate(self.envs):
-            env.batch = self.world.view(index)
+        task = env_class.task
+        self.options = Options.checked(env_class.__name__, **kwargs)
+        self.core = TaskBatch(task, self.options, int(num_envs), env_class.__name__)
+        self.core.build(np.full(task.num_cubes, CUBE_HALF))
         self.num_envs = int(num_envs)
         self.max_episode_steps = int(max_episode_steps)
-        self.single_observation_space = first.observation_space
-        self.single_action_space = first.action_space
-        self.observation_space = batch_space(first.observation_space, self.num_envs)
-        self.action_space = batch_space(first.action_space, self.num_envs)
+        self.single_observation_space, self.single_action_space = task_spaces(task)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.elapsed = np.zeros(self.num_envs, dtype=np.int64)
-        self.goals = np.zeros((self.num_envs, first.goal_size))
-        """Every copy's goal (B, goal_size), kept as each copy resets."""
-        self.grippers = [env.gripper for env in self.envs]
-        """Every copy's SuctionGripper (a reset makes a new one), kept as each copy resets."""
+        self.action_argument = f"{type(self).__name__}.step: actions"  # as errors name it
+
+    @property
+    def world(self):
+        """The batched World of the copies (world i is copy i)."""
+        return self.core.world
 
     def reset(self, *, seed: int | list | None = None, options: dict | None = None):
-        """Reset every copy; ``seed``: None, an int (copy i gets seed + i) or one per copy."""
+        """Reset every copy; ``seed``: None, an int (copy i gets seed + i) or one per copy. A
+        copy given no seed goes on with its generator (a random one at its first reset), as
+        ``gym.Env.reset`` does."""
         if seed is None or isinstance(seed, (int, np.integer)):
             seeds = [None if seed is None else int(seed) + i for i in range(self.num_envs)]
         else:
@@ -89,80 +85,56 @@ class RigidGymVectorEnv(VectorEnv):
             if len(seeds) != self.num_envs:
                 raise ValueError(f"{type(self).__name__}.reset: seed must be None, an int or "
                                  f"{self.num_envs} seeds, got {len(seeds)}")
-        observations, infos = [], {}
-        for i, env in enumerate(self.envs):
-            observation, info = self._reset_copy(i, seed=seeds[i], options=options)
-            observations.append(observation)
-            infos = self._add_info(infos, info, i)
+        rngs = [seeding.np_random(s)[0] if s is not None or rng is None else rng
+                for s, rng in zip(seeds, self.core.rngs)]
+        outcome = self.core.reset(ALL, rngs)
         self.elapsed[:] = 0
-        return {key: np.stack([o[key] for o in observations])
-                for key in self.single_observation_space.spaces}, infos
+        return outcome.observations, every_copy(outcome.successes)
 
     def step(self, actions):
-        actions = real_array(actions, f"{type(self).__name__}.step: actions", self.action_space)
-        expected = self.action_space.shape
-        if actions.shape != expected:
-            raise ValueError(f"{type(self).__name__}.step: actions must have shape {expected}, "
-                             f"got {actions.shape}")
-        if not np.all(np.isfinite(actions)):
-            bad = sorted(set(np.flatnonzero(~np.all(np.isfinite(actions), axis=1)).tolist()))
-            raise ValueError(f"{type(self).__name__}.step: actions must be finite (NaN and inf "
-                             f"are refused); copies {bad} are not")
-        actions = np.clip(actions, -1.0, 1.0)  # as the single env: outside [-1, 1] is clipped
-        grips = actions[:, 3] if self.envs[0].has_grip else None
-        command_all(self.world, self.grippers, actions[:, :3], grips)
-        self.world.step(SOLVER_STEPS)  # every copy in one kernel call, held objects carried in it
+        outcome = self.core.step(checked_actions(actions, self.action_space, self.action_argument))
         self.elapsed += 1
-        observations, rewards, terminated, successes = self._outcomes()
+        observations, successes = outcome.observations, outcome.successes
         truncated = self.elapsed >= self.max_episode_steps
+        ended = np.flatnonzero(outcome.terminated | truncated)
         infos = {}
-        for i in np.flatnonzero(terminated | truncated):
-            final_info = {"is_success": bool(successes[i])}
-            final_obs = {key: value[i].copy() for key, value in observations.items()}
-            infos = self._add_info(infos, {"final_obs": final_obs, "final_info": final_info}, i)
-            observation, reset_info = self._reset_copy(i)
-            for key, value in observation.items():
-                observations[key][i] = value
-            successes[i] = reset_info["is_success"]
-            self.elapsed[i] = 0
-        infos["is_success"] = successes  # every copy's, as _add_info would batch them
-        infos["_is_success"] = np.ones(self.num_envs, dtype=bool)
-        return observations, rewards, terminated, truncated, infos
-
-    def _reset_copy(self, i: int, **kwargs):
-        """Reset copy i (``kwargs``: its reset's seed and options) and keep its new goal and
-        gripper; returns its reset's (observation, info)."""
-        env = self.envs[i]
-        result = env.reset(**kwargs)
-        self.goals[i] = env.goal
-        self.grippers[i] = env.gripper
-        return result
-
-    def _outcomes(self):
-        """Every copy's step result at once, as ``RigidGymEnv.outcome`` gives each:
-        observations (dict of (B, ...) arrays), rewards (B,), terminated (B,) and successes
-        (B,) bool."""
-        first = self.envs[0]
-        s = self.world
-        held = np.array([gripper.held is not None for gripper in self.grippers]) \
-            if first.has_grip else None
-        vectors, achieved = observe(s.position, s.velocity, s.rotation, s.angular_velocity,
-                                    first.gripper.body, first.cubes, held)
-        observations = observations_from(self.envs, vectors, achieved, self.goals, s.time)
-        achieved32 = observations["achieved_goal"].astype(np.float64)
-        desired32 = observations["desired_goal"].astype(np.float64)
-        successes = np.asarray(first.goal_reached(achieved32, desired32), dtype=bool)
-        rewards = np.asarray(first.compute_reward(achieved32, desired32), dtype=np.float64)
-        terminated = successes & first.terminate_on_success
-        return observations, rewards, terminated, successes
+        if ended.size:
+            infos = final_infos(self.num_envs, ended, observations, successes)
+            first = self.core.reset(ended, [self.core.rngs[i] for i in ended.tolist()])
+            for key, value in first.observations.items():
+                observations[key][ended] = value
+            successes[ended] = first.successes
+            self.elapsed[ended] = 0
+        infos.update(every_copy(successes))
+        return observations, outcome.rewards, outcome.terminated, truncated, infos
 
     def compute_reward(self, achieved_goal, desired_goal, info=None):
         """The task's reward for goals of shape (..., goal_size) (as the single env's)."""
-        return self.envs[0].compute_reward(achieved_goal, desired_goal, info)
+        return self.core.compute_reward(achieved_goal, desired_goal)
 
-    def close_extras(self, **kwargs):
-        for env in self.envs:
-            env.close()
+
+def every_copy(successes: np.ndarray) -> dict:
+    """The info of every copy, batched as Gymnasium batches infos: ``is_success`` (B,) and
+    its mask."""
+    return {"is_success": successes, "_is_success": np.ones(len(successes), dtype=bool)}
+
+
+def final_infos(num_envs: int, ended: np.ndarray, observations: dict,
+                successes: np.ndarray) -> dict:
+    """The infos of the copies ``ended`` (indices) whose episodes ended in this step, as
+    Gymnasium's SAME_STEP autoreset gives them: ``final_obs`` an object array of each copy's
+    last observation (a dict), ``final_info`` its info batched ({"is_success", mask}), each
+    with its mask."""
+    mask = np.zeros(num_envs, dtype=bool)
+    mask[ended] = True
+    final_obs = np.full(num_envs, None, dtype=object)
+    for i in ended.tolist():
+        final_obs[i] = {key: value[i].copy() for key, value in observations.items()}
+    final_success = np.zeros(num_envs, dtype=bool)
+    final_success[ended] = successes[ended]
+    return {"final_obs": final_obs, "_final_obs": mask,
+            "final_info": {"is_success": final_success, "_is_success": mask.copy()},
+            "_final_info": mask.copy()}
 
 
 def vector_entry_point(env_class: type[RigidGymEnv]):

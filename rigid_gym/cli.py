@@ -142,7 +142,8 @@ def policy_name(policy: str) -> str:
 
 def make_policy(env, policy: str, algo: str | None, seed: int):
     """observation -> action for ``env``: random (the action space sampled, seeded with
-    ``seed``), scripted (``rigid_gym.envs.scripted``) or a stable-baselines3 model .zip."""
+    ``seed``), scripted (``rigid_gym.envs.scripted``) or a stable-baselines3 model .zip (its
+    algorithm ``algo``, else its settings file's, else the zip's)."""
     if policy == "random":
         env.action_space.seed(seed)
         return lambda observation: env.action_space.sample()
@@ -150,9 +151,9 @@ def make_policy(env, policy: str, algo: str | None, seed: int):
         from rigid_gym.envs.scripted import scripted_policy
 
         return scripted_policy(env)
-    from rigid_gym.agents.evaluate import load_model
+    from rigid_gym.agents.evaluate import load_model, run_metadata
 
-    model = load_model(policy, env, algo)
+    model = load_model(policy, env, algo or run_metadata(policy).get("algo"))
     return lambda observation: model.predict(observation, deterministic=True)[0]
 
 
@@ -174,7 +175,7 @@ def train(args) -> int:
                           n_envs=args.n_envs, out=args.out, eval_freq=args.eval_freq,
                           eval_episodes=args.eval_episodes,
                           checkpoint_freq=args.checkpoint_freq, progress_bar=args.progress_bar,
-                          demonstrations=args.demos, resume=resume)
+                          demonstrations=args.demos, resume=resume, progress=True)
     print(f"trained {args.env_id}: {folder / 'model.zip'}")
     if args.eval_freq:
         last = (folder / "evaluations.csv").read_text().strip().splitlines()[-1].split(",")
@@ -206,7 +207,7 @@ def evaluate(args) -> int:
     """Evaluate a saved model; optionally record the episodes."""
     from rigid_gym.agents.evaluate import evaluate as run_evaluation
 
-    result = run_evaluation(args.model, args.env, args.episodes)
+    result = run_evaluation(args.model, args.env, args.episodes, progress=True)
     print(f"{result['env_id']}: success rate {result['success_rate']:.0%} over "
           f"{result['episodes']} episodes, return {result['mean_return']:.1f} "
           f"+- {result['std_return']:.1f}")
@@ -326,7 +327,8 @@ def main(argv: list[str] | None = None) -> int:
                         "default: hyperparams.yml, else 0)")
     p.add_argument("--resume", action="store_true",
                    help="go on from the run's newest checkpoint (see --checkpoint-freq)")
-    p.add_argument("--progress-bar", action="store_true")
+    p.add_argument("--progress-bar", action="store_true",
+                   help="also a bar of the training steps (stable-baselines3's)")
     p = commands.add_parser("sweep", help="training runs as Ray Tune trials on a Ray cluster "
                                           "(RAY_ADDRESS; a local one when unset)")
     p.add_argument("env_ids", nargs="*", type=env_id, metavar="ENV_ID",
@@ -352,9 +354,11 @@ def main(argv: list[str] | None = None) -> int:
                    help="go on with a stopped sweep: failed and unfinished trials resume from "
                         "their newest checkpoints")
     p = commands.add_parser("evaluate", help="success rate of a trained model")
-    p.add_argument("model", help="a model.zip written by rigid-gym train")
+    p.add_argument("model", help="a model .zip: a run's model.zip (rigid-gym train), or one "
+                                 "of agents/models/")
     p.add_argument("--env", type=env_id, default=None,
-                   help="env id (default: from run.json beside the model)")
+                   help="env id (default: from the model's settings: run.json in its folder, "
+                        "or NAME.json beside NAME.zip)")
     p.add_argument("--episodes", type=bounded(int, 1, 10**5), default=100)
     p.add_argument("--record", metavar="DIR", default=None,
                    help="also record up to 3 episodes to DIR")

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigid_gym.shapes import Box, Mesh, _positive
+from rigid_gym.checks import positive
+from rigid_gym.shapes import Box, Mesh
 
 
 def prism_mesh(polygon, z_low: float, z_high: float) -> Mesh:
@@ -39,7 +40,7 @@ def prism_mesh(polygon, z_low: float, z_high: float) -> Mesh:
     return Mesh(vertices, np.concatenate([bottom, top, sides]))
 
 
-def _lathe(profile: np.ndarray, segments: int) -> Mesh:
+def lathe(profile: np.ndarray, segments: int) -> Mesh:
     """Revolve ``profile`` (K, 2) of (radius, z), m, about the z axis in ``segments`` steps.
 
     The profile runs from a point on the axis (radius 0) to another one, through points of
@@ -80,10 +81,10 @@ def l_shape_mesh(outer=(1.0, 1.0), thickness: float = 0.25, half_depth: float = 
     ``[0, t] x [t, ly] x [-hz, hz]`` with ``outer = (lx, ly)``, ``t = thickness`` and
     ``hz = half_depth`` (m). Its notch is the region ``x > t, y > t``; 12 vertices, 20 triangles.
     """
-    lx = _positive(outer[0], "l_shape_mesh.outer[0]")
-    ly = _positive(outer[1], "l_shape_mesh.outer[1]")
-    t = _positive(thickness, "l_shape_mesh.thickness")
-    hz = _positive(half_depth, "l_shape_mesh.half_depth")
+    lx = positive(outer[0], "l_shape_mesh.outer[0]")
+    ly = positive(outer[1], "l_shape_mesh.outer[1]")
+    t = positive(thickness, "l_shape_mesh.thickness")
+    hz = positive(half_depth, "l_shape_mesh.half_depth")
     if t >= min(lx, ly):
         raise ValueError(f"l_shape_mesh.thickness: must be < min(outer) = {min(lx, ly)}, got {t}")
     polygon = np.array([[0.0, 0.0], [lx, 0.0], [lx, t], [t, t], [t, ly], [0.0, ly]])
@@ -100,8 +101,8 @@ def bowl_mesh(outer_radius: float = 0.5, inner_radius: float = 0.4, segments: in
     thinner outside and thicker inside than the exact shell's (volume 1.6% below it with the
     defaults).
     """
-    big = _positive(outer_radius, "bowl_mesh.outer_radius")
-    small = _positive(inner_radius, "bowl_mesh.inner_radius")
+    big = positive(outer_radius, "bowl_mesh.outer_radius")
+    small = positive(inner_radius, "bowl_mesh.inner_radius")
     if small >= big:
         raise ValueError(
             f"bowl_mesh.inner_radius: must be < outer_radius = {big}, got {small}"
@@ -114,4 +115,4 @@ def bowl_mesh(outer_radius: float = 0.5, inner_radius: float = 0.4, segments: in
         np.column_stack([big * np.cos(up), big * np.sin(up)]),
         np.column_stack([small * np.cos(down), small * np.sin(down)]),
     ])
-    return _lathe(profile, int(segments))
+    return lathe(profile, int(segments))

@@ -12,10 +12,16 @@ file beside it, ``<application id>.rbl`` (``blueprint_of``; by hand, ``rerun FIL
 or ``rerun FOLDER/*``, with the viewer the rerun-sdk wheel installs, which must be the SDK's
 version; ``rerun FILE`` alone shows the data in rerun's own default layout).
 
+**What an env gives** (``rigid_gym.recordable.Recordable``, which every rigid_gym env has): its
+``world`` (the bodies), ``markers()`` (the goals), ``camera_view`` (the camera of its own frames)
+and ``scalar_series`` / ``scalars(action, reward, info)`` (the plots and their values per step).
+The recorder knows no env class.
+
 **The layout** (``<folder>/<application id>.rbl``, written once per folder): the 3D view (for
-an env, from its camera, beside plots of the reward, the action and success), playing on
-``sim_time``. The application id is the env id (``rigid_gym-Push-v0``), or a World
-recorder's ``application_id``.
+an env, framed as its own frames: from its camera, with the camera's field of view) beside
+one plot per scalar series, each line in its series' named colour, playing on ``sim_time``.
+The application id is the env id (``rigid_gym-Push-v0``), or a World recorder's
+``application_id``.
 
 **What a file holds** (entity paths; frames are right-handed, z up):
 
@@ -26,17 +32,20 @@ recorder's ``application_id``.
   ``BodySpec.body_from_shape`` (and its Compound part pose), an instance of ``Boxes3D``,
   ``Ellipsoids3D``, ``Capsules3D`` or ``Mesh3D`` (meshes, and a Plane as a square of
   ``PLANE_HALF_SIZE``).
-- ``/world/goals/<k>``: an env's goal markers (its ``_add_markers``), translucent, once.
+- ``/world/goals/<k>``: an env's goal markers (its ``markers()``), translucent, once.
+- ``/world/camera`` (envs): the env camera, a ``Pinhole`` with its field of view at its pose
+  (looking from the eye at the target), once; the 3D view looks through it.
 - ``/world/contacts/points`` (option ``contacts``): ``Points3D`` every step, the contact points
   within ``CONTACT_MARGIN``; ``/world/contacts/forces``: ``Arrows3D`` at each touching pair's
   contact centroid, its mean force on the pair's first body during the last solver step
   (impulse / dt), ``force_scale`` m per N.
-- ``/reward``, ``/action``, ``/success`` (envs): ``Scalars`` every env step: the reward, the
-  action as passed to ``step`` (one series per entry), ``info["is_success"]`` as 0 / 1.
+- ``/<series>`` (envs; for rigid_gym's ``/reward``, ``/action``, ``/success``): ``Scalars``
+  every env step, one line per label of the series (the action: one per entry, x, y, z,
+  grip), named and coloured once by a static ``SeriesLines``.
 
 Timelines: ``step`` (sequence: env steps, 0 = the state after ``reset``; for a World,
 ``World.steps``) and ``sim_time`` (duration: ``World.time``, s). Poses and contacts are rows at
-every step from 0; rewards, actions and successes at steps 1, 2, ... (the step they led to).
+every step from 0; the scalar series at steps 1, 2, ... (the step they led to).
 Rerun stores translations and quaternions as float32 and scalars as float64.
 
 **Cost.** Making a rerun file costs ~2 ms of CPU however short the episode (a quarter of a
@@ -74,10 +83,9 @@ import gymnasium as gym
 import numpy as np
 from rerun.chunk import RrdReader
 
-from rigid_gym.envs.base import RigidGymEnv
 from rigid_gym._core import STATIC
+from rigid_gym.recordable import Marker, Recordable
 from rigid_gym.recording_writer import Writer, blueprint_path, row_columns, writer
-from rigid_gym.render import MARKER_COLOR
 from rigid_gym.shapes import Plane, Pose
 
 RECORDINGS = "recordings"
@@ -88,8 +96,6 @@ CONTACT_MARGIN = 1e-3
 """m: contacts closer than this are recorded (resting contacts barely overlap)."""
 FORCE_SCALE = 0.05
 """m of arrow per N of contact force (a 0.1 kg cube's weight, 0.98 N, is a 5 cm arrow)."""
-ACTION_NAMES = ("x", "y", "z", "grip")
-"""Names of the action entries in the plots: the pad's motion along x, y, z, and the grip."""
 RUN_PATTERN = re.compile(r"[A-Za-z0-9_.-]+")
 
 
@@ -98,7 +104,8 @@ RUN_PATTERN = re.compile(r"[A-Za-z0-9_.-]+")
 class RecordRerun(gym.Wrapper):
     """Record a rigid_gym env's episodes, one ``.rrd`` file each (like ``RecordVideo``).
 
-    env: a rigid_gym env (``gym.make("rigid_gym/...")``, wrapped or not).
+    env: a rigid_gym env (``gym.make("rigid_gym/...")``, wrapped or not), or any env whose
+        ``unwrapped`` is ``rigid_gym.recordable.Recordable``.
     folder: output folder; files go to ``folder/<env id>/<run>-episode-<k>.rrd``, the env id
         with every character outside ``[A-Za-z0-9_.-]`` replaced by ``-``
         (``recordings/rigid_gym-Push-v0/...``); k counts resets from 0.
@@ -117,13 +124,17 @@ class RecordRerun(gym.Wrapper):
                  episode_trigger=None, run: str | None = None, contacts: bool = False,
                  force_scale: float = FORCE_SCALE, chunk_steps: int = CHUNK_STEPS):
         super().__init__(env)
-        if not isinstance(env.unwrapped, RigidGymEnv):
+        if not isinstance(env.unwrapped, Recordable):
             raise ValueError(f"RecordRerun.env: expected a rigid_gym env, got "
-                             f"{type(env.unwrapped).__name__}")
+                             f"{type(env.unwrapped).__name__} (it lacks members of "
+                             "rigid_gym.recordable.Recordable: world, camera_view, "
+                             "scalar_series, markers, scalars)")
         if episode_trigger is not None and not callable(episode_trigger):
             raise ValueError(f"RecordRerun.episode_trigger: expected a function episode index "
                              f"-> bool, got {episode_trigger!r}")
         self.episode_trigger = cubic_schedule if episode_trigger is None else episode_trigger
+        self.recordable = env.unwrapped
+        """What is recorded (``rigid_gym.recordable.Recordable``): the env under the wrappers."""
         self.run = _run_name(run, "RecordRerun.run")
         self.env_id = env.spec.id if env.spec is not None else type(env.unwrapped).__name__
         self.folder = Path(folder) / re.sub(r"[^A-Za-z0-9_.-]+", "-", self.env_id)
@@ -171,20 +182,18 @@ class RecordRerun(gym.Wrapper):
             writer().sync({str(path) for path in self.paths})
 
     def _begin_episode(self) -> None:
-        task = self.env.unwrapped
+        task = self.recordable
         name = f"{self.run}-episode-{self.episode_id}"
         path = self.folder / f"{name}.rrd"
-        recording = _open(path, name, task.world, 0, self.options, self._scene_layout,
-                          self.action_space.shape[0], first=not self.paths)
+        scalars = sum(len(series.labels) for series in task.scalar_series)
+        recording = _open(path, name, task.world, 0, self.options, self._scene_layout, scalars,
+                          first=not self.paths)
         if recording is None:
             return
         self._recording, self._step = recording, 0
         self.paths.append(path)
         try:
-            markers = _Markers()
-            task._add_markers(markers)
-            recording.send("markers", markers.shapes)
-            recording.send("action_names", ACTION_NAMES[:self.action_space.shape[0]])
+            recording.send("markers", [_marker_row(marker) for marker in task.markers()])
             recording.record(0)
         except BaseException:
             self._end_episode(wait=True)
@@ -192,17 +201,19 @@ class RecordRerun(gym.Wrapper):
 
     def _scene_layout(self, files: Writer) -> int:
         """The writer's key of the env's scene layout, sent again only for a new World."""
-        task = self.env.unwrapped
+        task = self.recordable
         if self._layout is None or self._layout[0] is not task.world.scene:
-            eye, target, _ = task.camera_view
+            eye, target, fov = task.camera_view
+            series = tuple((s.name, tuple(s.labels), tuple(map(tuple, s.rgb255().tolist())))
+                           for s in task.scalar_series)
             key = files.layout(task.world.scene, self.folder.name,
-                               (tuple(eye), tuple(target), True, False))
+                               ((tuple(map(float, eye)), tuple(map(float, target)), float(fov)),
+                                series, False))
             self._layout = (task.world.scene, key)
         return self._layout[1]
 
     def _record_step(self, action, reward, info) -> None:
-        self._recording.record(self._step, reward, np.ravel(action),
-                               bool(info.get("is_success", False)))
+        self._recording.record(self._step, self.recordable.scalars(action, reward, info))
 
     def _end_episode(self, wait: bool = False) -> None:
         """Hand the episode's file over to the writer; ``wait`` until it is written. Waiting
@@ -283,7 +294,7 @@ class WorldRecorder:
 
     def _layout(self, files: Writer) -> int:
         grid = not any(isinstance(b.shape, Plane) for b in self.world.scene.bodies)
-        return files.layout(self.world.scene, self.application_id, (None, None, False, grid))
+        return files.layout(self.world.scene, self.application_id, (None, (), grid))
 
     def close(self) -> None:
         """Write what is buffered and complete the file; returns once it is written
@@ -329,11 +340,12 @@ class _Options:
 
 
 def _open(path: Path, recording_id: str, world, index: int, options: _Options, layout,
-          actions: int = 0, first: bool = True) -> _Recording | None:
+          scalars: int = 0, first: bool = True) -> _Recording | None:
     """A new recording of world ``index`` of ``world`` to ``path``, or None when rerun is off
     (``RERUN=off``, ``0`` or ``false``, which rerun documents). ``layout``: a function of the
-    writer that gives the key of the scene's layout there; ``actions``: an env's action size
-    (0: no scalars); ``first``: the recorder's first file, whose folder is made here, so that
+    writer that gives the key of the scene's layout there; ``scalars``: the values an env
+    step records (its series' labels; 0: none); ``first``: the recorder's first file, whose
+    folder is made here, so that
     a bad folder fails here (a stat costs ~20 us between env steps; for later files the writer
     makes the folder again if it has gone)."""
     if os.environ.get("RERUN", "").strip().lower() in ("0", "off", "false"):
@@ -341,7 +353,7 @@ def _open(path: Path, recording_id: str, world, index: int, options: _Options, l
     if first:
         path.parent.mkdir(parents=True, exist_ok=True)
     files = writer()
-    return _Recording(files, path, recording_id, layout(files), world, index, options, actions)
+    return _Recording(files, path, recording_id, layout(files), world, index, options, scalars)
 
 
 class _Recording:
@@ -350,18 +362,18 @@ class _Recording:
     completes the file. Small values go to the writer as plain tuples, rows as the bytes of
     one array (``_Rows``; the writer keeps the moving bodies' columns): pickling a numpy
     array costs ~7 us however small it is, ~25 us between env steps, its bytes a quarter of
-    that. ``actions``: an env's action size, whose rows also hold the reward, action and
-    success (0: a World's)."""
+    that. ``scalars``: the values an env step records, which its rows also hold (0: a
+    World's rows hold none)."""
 
     def __init__(self, files: Writer, path: Path, recording_id: str, layout: int, world,
-                 index: int, options: _Options, actions: int = 0):
+                 index: int, options: _Options, scalars: int = 0):
         self.files, self.path = files, str(path)  # a str pickles ~5x faster than a Path
         self.world, self.index, self.options = world, index, options
         bodies = world.scene.bodies
         statics = {b.index: (tuple(world.state.position[index, b.index].tolist()),
                              tuple(world.state.orientation[index, b.index].tolist()))
                    for b in bodies if b.motion == STATIC}
-        self.rows = _Rows(len(bodies), actions)
+        self.rows = _Rows(len(bodies), scalars)
         self.contacts: list[tuple] = []  # (step, time, points, origins, vectors): ragged rows
         self.closed = False
         files.send("open", self.path, recording_id, layout, statics, options.contacts)
@@ -369,15 +381,15 @@ class _Recording:
 
     def send(self, kind: str, *values) -> None:
         """Hand the writer a message about this file: one of ``recording_writer``'s kinds
-        ("markers", "action_names", "rows", ...) and its values."""
+        ("markers", "rows", ...) and its values."""
         self.files.send(kind, self.path, *values)
 
-    def record(self, step: int, reward: float = 0.0, action=None, success: bool = False) -> None:
-        """Buffer the bodies' poses (and contacts, if on) at ``step``; for an env after a step
-        (an ``action`` given), also its reward, action (a,) and success."""
+    def record(self, step: int, scalars=None) -> None:
+        """Buffer the bodies' poses (and contacts, if on) at ``step``; for an env after a step,
+        also the step's ``scalars`` (its series' values, in order)."""
         w, s = self.world, self.world.state
         self.rows.append(step, w.time, s.position[self.index], s.orientation[self.index],
-                         reward, success, action)
+                         scalars)
         if self.options.contacts:
             self.contacts.append((step, w.time,
                                   *_contacts(w, self.index, self.options.force_scale)))
@@ -415,17 +427,17 @@ class _Recording:
 class _Rows:
     """Rows buffered for columns, one float64 array of them that grows as needed (no object
     per row, and one buffer to hand over).
-    A row of ``bodies`` bodies and ``actions`` action entries (0: a World's rows) holds:
+    A row of ``bodies`` bodies and ``scalars`` scalar values (0: a World's rows) holds:
 
         step, sim_time (s), positions (bodies x 3, m), orientations (bodies x 4, w x y z)
-        [, reward, success (0 or 1), action (actions)]
+        [, the scalars]
 
-    A row without an action (an env's reset) has NaN scalars.
+    A row without scalars (an env's reset) has NaN there.
     """
 
-    def __init__(self, bodies: int, actions: int = 0):
+    def __init__(self, bodies: int, scalars: int = 0):
         self.orientations, self.scalars = row_columns(bodies)
-        self.width = self.scalars + (2 + actions if actions else 0)
+        self.width = self.scalars + scalars
         self.count = 0
         self.data = np.empty((0, self.width))
 
@@ -433,10 +445,9 @@ class _Rows:
         return self.count
 
     def append(self, step: int, sim_time: float, position: np.ndarray,
-               orientation: np.ndarray, reward: float = 0.0, success: bool = False,
-               action: np.ndarray | None = None) -> None:
-        """Add a row: position (bodies, 3), orientation (bodies, 4); the scalars if
-        ``action`` (actions,) is given."""
+               orientation: np.ndarray, scalars=None) -> None:
+        """Add a row: position (bodies, 3), orientation (bodies, 4), and ``scalars`` if given
+        (the row's scalar values, in order)."""
         if self.count == len(self.data):
             grown = np.empty((max(64, 2 * self.count), self.width))
             grown[:self.count] = self.data[:self.count]
@@ -446,11 +457,7 @@ class _Rows:
         row[2:self.orientations] = position.ravel()
         row[self.orientations:self.scalars] = orientation.ravel()
         if self.width > self.scalars:
-            if action is None:
-                row[self.scalars:] = np.nan
-            else:
-                row[self.scalars], row[self.scalars + 1] = reward, success
-                row[self.scalars + 2:] = action
+            row[self.scalars:] = np.nan if scalars is None else scalars
         self.count += 1
 
     def take(self) -> np.ndarray:
@@ -462,21 +469,13 @@ class _Rows:
 
 # -- helpers ------------------------------------------------------------------------------------
 
-class _Markers:
-    """Collects an env's goal markers: stands in for the Renderer in ``_add_markers``."""
-
-    def __init__(self):
-        self.shapes: list = []
-
-    def add_marker(self, shape, position=(0.0, 0.0, 0.0), color=MARKER_COLOR, alpha=1.0,
-                   orientation=(1.0, 0.0, 0.0, 0.0)) -> int:
-        """As ``Renderer.add_marker``: the marker's shape, pose, colour (r, g, b) in [0, 1]
-        and opacity in (0, 1]; returns its index."""
-        pose = Pose(position, orientation)  # checked
-        rgba = np.round(255 * np.append(np.asarray(color, dtype=np.float64), alpha))
-        self.shapes.append((shape, tuple(pose.position.tolist()),
-                            tuple(pose.orientation.tolist()), tuple(rgba.astype(int).tolist())))
-        return len(self.shapes) - 1
+def _marker_row(marker: Marker) -> tuple:
+    """A goal marker as the writer takes it: (shape, position (3,) m, orientation (4,) w, x,
+    y, z, RGBA (4,) ints in [0, 255]), plain tuples (checked through Pose)."""
+    pose = Pose(marker.position, marker.orientation)
+    rgba = np.round(255 * np.append(np.asarray(marker.color, dtype=np.float64), marker.alpha))
+    return (marker.shape, tuple(pose.position.tolist()), tuple(pose.orientation.tolist()),
+            tuple(rgba.astype(int).tolist()))
 
 
 def _contacts(world, index: int, force_scale: float):

@@ -15,16 +15,17 @@ were sent.
 Messages are tuples, handed over in pickled lists on the writer's standard input:
 
 - ``("layout", key, scene, application_id, blueprint)``: what files of ``scene`` share, built
-  once (``_Layout``); blueprint: the ``_blueprint`` arguments (eye, target, scalars, grid).
+  once (``_Layout``); blueprint: the ``_blueprint`` arguments (camera, series, grid): camera
+  (eye (3,) m, target (3,) m, vertical field of view (deg)) or None, series ((name, labels,
+  RGB (lines, 3) ints in [0, 255]) per plot), grid a bool.
 - ``("open", path, recording_id, key, statics, contacts)``: start a file (path: a str, as
   in every message about a file); statics: {body index: (position (3,) m, orientation (4,)
   w, x, y, z)} of the static bodies, as tuples.
 - ``("markers", path, markers)``: goal markers, (shape, position, orientation, RGBA) each
   (``_File.markers``).
-- ``("action_names", path, names)``.
 - ``("rows", path, data, w)``: rows (T, w) of ``recording._Rows``, as the bytes of a
-  float64 array: step, time, every body's pose, and for an env its reward, success and
-  action (none at step 0, the env's reset).
+  float64 array: step, time, every body's pose, and for an env the values of its series
+  in the layout's order (none at step 0, the env's reset).
 - ``("contacts", path, steps (T,), times (T,) s, points, origins, vectors)``: rows.
 - ``("close", path)``: write the file (until then its chunks are held in memory: ~40 bytes
   per moving body and row).
@@ -68,7 +69,7 @@ from rerun.chunk import Chunk, ChunkStore
 
 from rigid_gym import quaternion as quat
 from rigid_gym._core import STATIC
-from rigid_gym.render import _body_colors, _corner_normals, tessellate
+from rigid_gym.render import body_colors, corner_normals, tessellate
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
 
@@ -86,6 +87,8 @@ RECURRING_CACHE = 64
 """Recurring static rows kept per layout (``_Layout.static``)."""
 CONTACT_COLOR = (230, 40, 40)
 FORCE_COLOR = (250, 150, 30)
+CAMERA_ENTITY = "world/camera"
+"""Where an env's camera is (a Pinhole), which the 3D view looks through."""
 
 
 # -- the client ---------------------------------------------------------------------------------
@@ -304,10 +307,10 @@ def _messages(source):
 class _Layout:
     """What every file of one scene shares, built once (for each file, building it took
     longer than writing an episode's data): every body's entity path, the scene's static rows
-    (coordinates, each body's geometry in its body frame) as rerun chunks, a cache of rows
-    that recur in many files (``static``), and the blueprint, written beside the files
-    (``blueprint_beside``). A chunk may be written to any number of files: each file is a
-    store of its own."""
+    (coordinates, each body's geometry in its body frame, the camera, the series' names and
+    colours) as rerun chunks, a cache of rows that recur in many files (``static``), and the
+    blueprint, written beside the files (``blueprint_beside``). A chunk may be written to any
+    number of files: each file is a store of its own."""
 
     def __init__(self, scene: Scene, application_id: str, blueprint: tuple):
         self.application_id = application_id
@@ -315,12 +318,17 @@ class _Layout:
         self.blueprint_folders: set[Path] = set()
         self.entities = [f"world/bodies/{rr.escape_entity_path_part(b.name)}"
                          for b in scene.bodies]
-        colors = np.round(255 * _body_colors(scene, None)).astype(np.uint8)
+        camera, self.series, _ = blueprint
+        colors = np.round(255 * body_colors(scene)).astype(np.uint8)
         self.scene = [_static_chunk("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP)] + [
             _static_chunk(self.entities[body.index],
                           *_geometry(body.shape, body.body_from_shape,
                                      np.append(colors[body.index], 255)))
             for body in scene.bodies]
+        if camera is not None:
+            self.scene.append(_static_chunk(CAMERA_ENTITY, *_camera(*camera)))
+        self.scene += [_static_chunk(name, rr.SeriesLines(names=list(labels), colors=list(rgb)))
+                       for name, labels, rgb in self.series]
         self.moving = [b.index for b in scene.bodies if b.motion != STATIC]
         self.recurring: dict[tuple, Chunk] = {}
 
@@ -386,16 +394,12 @@ class _File:
                             self.layout.static(entity, pickle.dumps((shape, rgba)),
                                                lambda: _geometry(shape, Pose(), rgba))]
 
-    def action_names(self, names: list) -> None:
-        """Name the series of ``/action`` (one name per action entry)."""
-        self.chunks.append(self.layout.static("action", tuple(names),
-                                              lambda: [rr.SeriesLines(names=list(names))]))
-
     def rows(self, data: bytes, width: int) -> None:
         """Rows (T, width) of float64 as bytes: step, sim_time (s), every body's position
         (n x 3, m) and orientation (n x 4, w x y z), n = the scene's bodies in order; for an
-        env, then its reward, success (0 or 1) and action (a), recorded from step 1 on. The
-        moving bodies' poses are written (a static body's is written once, on opening)."""
+        env, then the values of the layout's series in order (one per label), recorded from
+        step 1 on. The moving bodies' poses are written (a static body's is written once, on
+        opening)."""
         rows = np.frombuffer(data).reshape(-1, width)
         n = len(self.layout.entities)
         orientations, scalars = row_columns(n)
@@ -412,14 +416,13 @@ class _File:
         stepped = rows[after_reset, scalars:]
         if stepped.shape[1] and len(stepped):
             indexes = _indexes(steps[after_reset], times[after_reset])
-            action = stepped[:, 2:]
-            self.chunks += [
-                Chunk.from_columns("reward", indexes, rr.Scalars.columns(scalars=stepped[:, 0])),
-                Chunk.from_columns("success", indexes,
-                                   rr.Scalars.columns(scalars=stepped[:, 1])),
-                Chunk.from_columns("action", indexes,
-                                   rr.Scalars.columns(scalars=action.ravel())
-                                   .partition(lengths=np.full(len(action), action.shape[1])))]
+            start = 0
+            for name, labels, _ in self.layout.series:
+                values = stepped[:, start:start + len(labels)]
+                start += len(labels)
+                self.chunks.append(Chunk.from_columns(
+                    name, indexes, rr.Scalars.columns(scalars=values.ravel())
+                    .partition(lengths=np.full(len(values), len(labels)))))
 
     def contacts(self, steps, times, points, origins, vectors) -> None:
         """Per row: contact points (k, 3) m, force arrows' origins and vectors (p, 3) m."""
@@ -525,7 +528,7 @@ def _meshes(parts: list, rgba: np.ndarray) -> rr.Mesh3D:
             vertices, mesh_triangles = tessellate(shape)
             corners = vertices[mesh_triangles].reshape(-1, 3)
             faces = np.arange(len(corners)).reshape(-1, 3)
-            normal = _corner_normals(vertices, mesh_triangles)
+            normal = corner_normals(vertices, mesh_triangles)
         positions.append(pose.apply(corners))
         normals.append(normal @ pose.rotation().T)
         triangles.append(faces + count)
@@ -550,16 +553,38 @@ def _xyzw(q) -> np.ndarray:
     return np.asarray(q)[..., [1, 2, 3, 0]]
 
 
-def _blueprint(eye, target, scalars: bool, grid: bool) -> rrb.Blueprint:
-    """The 3D view (from ``eye`` (3,) m towards ``target`` (3,) m if given; rerun's line grid
-    at z = 0 only if ``grid``: a table would hide it), beside plots of the reward, the action
-    and success when ``scalars``; playing on ``sim_time``."""
-    controls = None if eye is None else rrb.EyeControls3D(position=eye, look_target=target)
+def _camera(eye, target, fov_deg: float) -> list:
+    """The archetypes of the env camera at ``CAMERA_ENTITY``: its pose (looking from ``eye``
+    (3,) m at ``target`` (3,) m, z up on screen) and a Pinhole of its vertical field of view
+    ``fov_deg`` and square frames (``rigid_gym.render.Camera``'s), drawn as no more than a
+    thin frustum."""
+    eye, target = np.asarray(eye, dtype=np.float64), np.asarray(target, dtype=np.float64)
+    forward = (target - eye) / np.linalg.norm(target - eye)
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    down = np.cross(forward, right)  # the camera's axes are right, down, forward (RDF)
+    orientation = quat.from_matrix(np.column_stack([right, down, forward]))
+    return [_transform(eye, orientation),
+            rr.Pinhole(fov_y=float(np.radians(fov_deg)), aspect_ratio=1.0,
+                       camera_xyz=rr.ViewCoordinates.RDF, image_plane_distance=0.05,
+                       line_width=0.00002)]
+
+
+def _blueprint(camera, series: tuple, grid: bool) -> rrb.Blueprint:
+    """The 3D view, looking through the env's ``camera`` ((eye, target, field of view) at
+    ``CAMERA_ENTITY``) if given (rerun's default eye otherwise; rerun's line grid at z = 0
+    only if ``grid``: a table would hide it), beside one plot per series ((name, labels,
+    colours) each); playing on ``sim_time``."""
+    controls = None
+    if camera is not None:
+        eye, target, _ = camera
+        controls = rrb.EyeControls3D(position=eye, look_target=target,
+                                     tracking_entity=f"/{CAMERA_ENTITY}")
     view = rrb.Spatial3DView(origin="/world", name="scene", eye_controls=controls,
                              line_grid=grid)
-    if scalars:
+    if series:
         plots = rrb.Vertical(*(rrb.TimeSeriesView(origin=f"/{name}", name=name)
-                               for name in ("reward", "action", "success")))
+                               for name, _, _ in series))
         view = rrb.Horizontal(view, plots, column_shares=[3, 1])
     return rrb.Blueprint(view, rrb.BlueprintPanel(state="collapsed"),
                          rrb.SelectionPanel(state="collapsed"),

@@ -22,10 +22,10 @@ import numpy as np
 from rigid_gym import _core
 from rigid_gym import quaternion as quat
 from rigid_gym._core import DYNAMIC, KINEMATIC
-from rigid_gym.meshes import _lathe, box_mesh
-from rigid_gym.scene import Scene, _vector
-from rigid_gym.shapes import (SOLID_SHAPES, Box, Capsule, Compound, Mesh, Plane, Sphere,
-                              _finite_array, _positive)
+from rigid_gym.checks import finite_array, number, positive, vector
+from rigid_gym.meshes import box_mesh, lathe
+from rigid_gym.scene import Scene
+from rigid_gym.shapes import SOLID_SHAPES, Box, Capsule, Compound, Mesh, Plane, Sphere
 
 SPHERE_SEGMENTS = 24
 """Steps around the axis of a tessellated sphere or capsule (its rings have 24 vertices)."""
@@ -74,10 +74,10 @@ class Camera:
 
     def __post_init__(self):
         for field in ("eye", "target", "up"):
-            value = _vector(getattr(self, field), 3, f"Camera.{field}")
+            value = vector(getattr(self, field), 3, f"Camera.{field}")
             value.setflags(write=False)
             object.__setattr__(self, field, value)
-        fov = _number(self.fov_deg, "Camera.fov_deg")
+        fov = number(self.fov_deg, "Camera.fov_deg")
         if not 0.0 < fov < 180.0:
             raise ValueError(f"Camera.fov_deg: must be in (0, 180) degrees, got {self.fov_deg!r}")
         object.__setattr__(self, "fov_deg", fov)
@@ -139,7 +139,7 @@ def tessellate(shape, plane_half_size: float = 1.0) -> tuple[np.ndarray, np.ndar
     if isinstance(shape, Compound):
         return _tessellate_compound(shape, plane_half_size)
     if isinstance(shape, Plane):
-        return _tiled_square(_positive(plane_half_size, "tessellate.plane_half_size"))
+        return _tiled_square(positive(plane_half_size, "tessellate.plane_half_size"))
     raise ValueError(f"tessellate.shape: expected Sphere, Box, Capsule, Mesh, Compound or Plane, "
                      f"got {type(shape).__name__}")
 
@@ -166,14 +166,14 @@ class Renderer:
         self.width = _size(width, "Renderer.width")
         self.height = _size(height, "Renderer.height")
         self.camera = Camera() if camera is None else camera
-        light = _vector(light_direction, 3, "Renderer.light_direction")
+        light = vector(light_direction, 3, "Renderer.light_direction")
         if not np.linalg.norm(light) > 0.0:
             raise ValueError("Renderer.light_direction: must be nonzero, got [0, 0, 0]")
         self.light = light / np.linalg.norm(light)  # (3,) unit vector towards the light
         self.num_bodies = len(scene)
-        body_colors = _body_colors(scene, colors)
-        half = _positive(plane_half_size, "Renderer.plane_half_size")
-        self._parts = [_body_part(b, body_colors[b.index], half) for b in scene.bodies]
+        colours = body_colors(scene, colors)
+        half = positive(plane_half_size, "Renderer.plane_half_size")
+        self._parts = [_body_part(b, colours[b.index], half) for b in scene.bodies]
         self._rotation = np.tile(np.eye(3), (self.num_bodies, 1, 1))  # (N, 3, 3) per instance:
         self._translation = np.zeros((self.num_bodies, 3))  # bodies, then markers; m
         self._pack()
@@ -212,11 +212,11 @@ class Renderer:
             raise ValueError(f"{where}: shape must be Sphere, Box, Capsule, Mesh or Compound, "
                              f"got {type(shape).__name__}")
         rgb = _color(color, f"{where}: color")
-        alpha = _number(alpha, f"{where}: alpha")
+        alpha = number(alpha, f"{where}: alpha")
         if not 0.0 < alpha <= 1.0:
             raise ValueError(f"{where}: alpha must be in (0, 1], got {alpha!r}")
         vertices, triangles = tessellate(shape)
-        corners, normals = vertices[triangles].reshape(-1, 3), _corner_normals(vertices, triangles)
+        corners, normals = vertices[triangles].reshape(-1, 3), corner_normals(vertices, triangles)
         kind = _OPAQUE if alpha == 1.0 else _TRANSLUCENT
         self._parts.append(_Part(corners, normals, np.tile(rgb, (len(triangles), 1)), alpha, kind))
         self._rotation = np.concatenate([self._rotation, np.eye(3)[None]])
@@ -230,9 +230,9 @@ class Renderer:
         quaternion (w, x, y, z) of its shape frame (kept when None)."""
         count = len(self._parts) - self.num_bodies
         instance = self.num_bodies + _index(index, count, "Renderer.set_marker.index", "markers")
-        self._translation[instance] = _vector(position, 3, "Renderer.set_marker.position")
+        self._translation[instance] = vector(position, 3, "Renderer.set_marker.position")
         if orientation is not None:
-            q = _vector(orientation, 4, "Renderer.set_marker.orientation")
+            q = vector(orientation, 4, "Renderer.set_marker.orientation")
             quat.check_unit(q, "Renderer.set_marker.orientation")
             self._rotation[instance] = quat.to_matrix(quat.normalize(q))
 
@@ -243,8 +243,8 @@ class Renderer:
         mass, as ``World.position``) and ``orientation`` (n, 4) unit quaternions (w, x, y, z)
         (as ``World.orientation``). Returns a new (height, width, 3) uint8 RGB array."""
         n = self.num_bodies
-        x = _finite_array(position, (n, 3), "Renderer.render.position")
-        q = _finite_array(orientation, (n, 4), "Renderer.render.orientation")
+        x = finite_array(position, (n, 3), "Renderer.render.position")
+        q = finite_array(orientation, (n, 4), "Renderer.render.orientation")
         quat.check_unit(q, "Renderer.render.orientation")
         self._rotation[:n] = quat.to_matrix(q)
         self._translation[:n] = x
@@ -357,7 +357,7 @@ def _body_part(body, rgb: np.ndarray, plane_half_size: float) -> _Part:
     vertices, triangles = tessellate(body.shape, plane_half_size)
     pose = body.body_from_shape
     corners = pose.apply(vertices[triangles].reshape(-1, 3))
-    normals = _corner_normals(vertices, triangles) @ pose.rotation().T
+    normals = corner_normals(vertices, triangles) @ pose.rotation().T
     colors = np.tile(rgb, (len(triangles), 1))
     if isinstance(body.shape, Plane):
         centre = vertices[triangles].mean(axis=1)
@@ -367,7 +367,7 @@ def _body_part(body, rgb: np.ndarray, plane_half_size: float) -> _Part:
     return _Part(corners, normals, colors, 1.0, _CASTER)
 
 
-def _body_colors(scene: Scene, colors: dict | None) -> np.ndarray:
+def body_colors(scene: Scene, colors: dict | None = None) -> np.ndarray:
     """(n, 3) RGB of every body: the defaults by motion, then the overrides in ``colors``."""
     out, dynamic = np.empty((len(scene), 3)), 0
     for body in scene.bodies:
@@ -395,7 +395,7 @@ def _revolve(radius: float, half_length: float) -> tuple[np.ndarray, np.ndarray]
     arcs = [np.column_stack([radius * np.cos(a), radius * np.sin(a) + dz])
             for a, dz in ((lower, -half_length), (upper, half_length))]
     profile = np.concatenate([arcs[0], arcs[1][1:]]) if half_length == 0.0 else np.concatenate(arcs)
-    mesh = _lathe(profile, SPHERE_SEGMENTS)
+    mesh = lathe(profile, SPHERE_SEGMENTS)
     return mesh.vertices.copy(), mesh.triangles.copy()
 
 
@@ -422,7 +422,7 @@ def _tiled_square(half: float) -> tuple[np.ndarray, np.ndarray]:
     return vertices, triangles.astype(np.int32)
 
 
-def _corner_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+def corner_normals(vertices: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """(3T, 3) unit shading normals at the triangles' corners, in the mesh's frame.
 
     A corner's normal is the area-weighted mean of the normals of the faces around its vertex
@@ -462,17 +462,6 @@ def _light_axes(light: np.ndarray) -> np.ndarray:
     return np.array([u, np.cross(light, u), light])
 
 
-def _number(value, where: str) -> float:
-    """``value`` as a finite float, or a ValueError naming ``where``."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{where}: expected a number, got {value!r}") from exc
-    if not np.isfinite(x):
-        raise ValueError(f"{where}: must be finite, got {value!r}")
-    return x
-
-
 def _size(value, where: str) -> int:
     """An image side in pixels: an int in [16, 4096]."""
     if not _is_int(value) or not 16 <= value <= 4096:
@@ -494,7 +483,7 @@ def _index(value, count: int, where: str, what: str) -> int:
 
 def _color(value, where: str) -> np.ndarray:
     """(3,) RGB with every channel in [0, 1]."""
-    rgb = _vector(value, 3, where)
+    rgb = vector(value, 3, where)
     if np.any((rgb < 0.0) | (rgb > 1.0)):
         raise ValueError(f"{where}: RGB channels must be in [0, 1], got {rgb.tolist()}")
     return rgb

@@ -19,6 +19,7 @@ import numpy as np
 from rigid_gym import quaternion as quat
 from rigid_gym.inertia import MassProperties, inverse_moments, mass_properties, principal_axes
 from rigid_gym._core import DYNAMIC, KINEMATIC, STATIC
+from rigid_gym.checks import vector
 from rigid_gym.shapes import SOLID_SHAPES, Plane, Pose
 
 MOTION_NAMES = {STATIC: "static", KINEMATIC: "kinematic", DYNAMIC: "dynamic"}
@@ -72,7 +73,7 @@ class Scene:
     """
 
     def __init__(self, gravity=(0.0, 0.0, -9.81)):
-        self.gravity = _vector(gravity, 3, "Scene.gravity")
+        self.gravity = vector(gravity, 3, "Scene.gravity")
         self.bodies: list[BodySpec] = []
 
     # -- building -------------------------------------------------------------------------
@@ -122,10 +123,10 @@ class Scene:
             -(axes.T @ props.center) if props else np.zeros(3), quat.conjugate(quat.from_matrix(axes))
         )
 
-        shape_q = _vector(orientation, 4, f"{where}: orientation")
+        shape_q = vector(orientation, 4, f"{where}: orientation")
         quat.check_unit(shape_q, f"{where}: orientation")
         shape_q = quat.normalize(shape_q)
-        shape_x = _vector(position, 3, f"{where}: position")
+        shape_x = vector(position, 3, f"{where}: position")
         # world_from_body = world_from_shape * shape_from_body
         body_q = quat.normalize(quat.multiply(shape_q, quat.from_matrix(axes)))
         body_x = shape_x + quat.rotate(shape_q, props.center if props else np.zeros(3))
@@ -135,8 +136,8 @@ class Scene:
             mass=props.mass if props else np.inf,
             principal_moments=moments, body_from_shape=body_from_shape,
             position=body_x, orientation=body_q,
-            velocity=_vector(velocity, 3, f"{where}: velocity"),
-            angular_velocity=_vector(angular_velocity, 3, f"{where}: angular_velocity"),
+            velocity=vector(velocity, 3, f"{where}: velocity"),
+            angular_velocity=vector(angular_velocity, 3, f"{where}: angular_velocity"),
             friction=_in_range(friction, 0.0, np.inf, f"{where}: friction"),
             restitution=_in_range(restitution, 0.0, 1.0, f"{where}: restitution"),
         )
@@ -180,18 +181,6 @@ class Scene:
         if inertia is not None:
             props = MassProperties(props.mass, props.center, _inertia_tensor(inertia, where))
         return props
-
-
-def _vector(value, size: int, where: str) -> np.ndarray:
-    try:
-        arr = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{where}: expected {size} numbers, got {value!r}") from exc
-    if arr.shape != (size,):
-        raise ValueError(f"{where}: expected shape ({size},), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{where}: must be finite, got {arr.tolist()}")
-    return arr
 
 
 def _in_range(value, low: float, high: float, where: str, open_low: bool = False) -> float:

@@ -17,31 +17,7 @@ import numpy as np
 
 from rigid_gym import _core
 from rigid_gym import quaternion as quat
-
-
-def _finite_array(value, shape: tuple[int, ...], where: str) -> np.ndarray:
-    """``value`` as a float64 array of ``shape`` (``-1`` = any length), or a ValueError."""
-    try:
-        arr = np.array(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{where}: expected numbers, got {value!r}") from exc
-    if arr.ndim != len(shape) or any(s != -1 and s != a for s, a in zip(shape, arr.shape)):
-        raise ValueError(f"{where}: expected shape {shape}, got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{where}: must be finite, got {value!r}")
-    arr.setflags(write=False)
-    return arr
-
-
-def _positive(value, where: str) -> float:
-    """``value`` as a finite float > 0, or a ValueError."""
-    try:
-        x = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{where}: expected a number, got {value!r}") from exc
-    if not np.isfinite(x) or x <= 0.0:
-        raise ValueError(f"{where}: must be finite and > 0, got {value!r}")
-    return x
+from rigid_gym.checks import finite_array, positive
 
 
 @dataclass(frozen=True)
@@ -51,7 +27,7 @@ class Sphere:
     radius: float
 
     def __post_init__(self):
-        object.__setattr__(self, "radius", _positive(self.radius, "Sphere.radius"))
+        object.__setattr__(self, "radius", positive(self.radius, "Sphere.radius"))
 
     def signed_distance(self, points: np.ndarray) -> np.ndarray:
         """(P, 3) points in the shape frame -> (P,) signed distances, m."""
@@ -70,7 +46,7 @@ class Box:
     half_extents: tuple[float, float, float]
 
     def __post_init__(self):
-        h = _finite_array(self.half_extents, (3,), "Box.half_extents")
+        h = finite_array(self.half_extents, (3,), "Box.half_extents")
         if np.any(h <= 0.0):
             raise ValueError(f"Box.half_extents: every entry must be > 0, got {h.tolist()}")
         object.__setattr__(self, "half_extents", h)
@@ -95,9 +71,9 @@ class Capsule:
     half_length: float
 
     def __post_init__(self):
-        object.__setattr__(self, "radius", _positive(self.radius, "Capsule.radius"))
+        object.__setattr__(self, "radius", positive(self.radius, "Capsule.radius"))
         object.__setattr__(
-            self, "half_length", _positive(self.half_length, "Capsule.half_length")
+            self, "half_length", positive(self.half_length, "Capsule.half_length")
         )
 
     def signed_distance(self, points: np.ndarray) -> np.ndarray:
@@ -145,7 +121,7 @@ class Mesh:
         if (isinstance(self.sdf_resolution, bool) or not isinstance(self.sdf_resolution, (int, np.integer))
                 or not 4 <= self.sdf_resolution <= 512):
             raise ValueError(f"Mesh.sdf_resolution: must be an int in [4, 512], got {self.sdf_resolution!r}")
-        v = _finite_array(self.vertices, (-1, 3), "Mesh.vertices")
+        v = finite_array(self.vertices, (-1, 3), "Mesh.vertices")
         try:
             t = np.array(self.triangles, dtype=np.int64)
         except (TypeError, ValueError) as exc:
@@ -220,8 +196,8 @@ class Pose:
     orientation: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
 
     def __post_init__(self):
-        object.__setattr__(self, "position", _finite_array(self.position, (3,), "Pose.position"))
-        q = _finite_array(self.orientation, (4,), "Pose.orientation")
+        object.__setattr__(self, "position", finite_array(self.position, (3,), "Pose.position"))
+        q = finite_array(self.orientation, (4,), "Pose.orientation")
         quat.check_unit(q, "Pose.orientation")
         object.__setattr__(self, "orientation", q)
 

@@ -143,6 +143,29 @@ def test_train_then_evaluate(tmp_path, capsys):
     assert "rigid_gym/PushDense-v0: success rate" in capsys.readouterr().out
 
 
+def test_train_says_what_it_does_while_it_prepares_and_evaluates(tmp_path, capsys):
+    assert main(["train", "rigid_gym/Stack-v0", "--steps", "120", "--demos", "1", "--out",
+                 str(tmp_path), "--eval-freq", "120", "--eval-episodes", "1"]) == 0
+    err = capsys.readouterr().err
+    for stage in ("making 1 env(s) and the bc_sac model", "scripted demonstrations",
+                  "training bc_sac for 120 env steps", "evaluating on rigid_gym/Stack-v0"):
+        assert stage in err
+
+
+@pytest.mark.parametrize("name, env_id", [("push_sac_seed0", "rigid_gym/Push-v0"),
+                                          ("stack_bcsac_seed0", "rigid_gym/Stack-v0"),
+                                          ("throw_sac_seed0", "rigid_gym/Throw-v0")])
+def test_every_committed_model_is_evaluated_with_the_settings_beside_it(name, env_id, capsys):
+    """agents/models/NAME.zip is read with NAME.json (its env id and algorithm: bc_sac for
+    Stack), as the README runs them; the episodes show a bar on standard error."""
+    from pathlib import Path
+
+    model = Path(__file__).resolve().parent.parent / "agents" / "models" / f"{name}.zip"
+    assert main(["evaluate", str(model), "--episodes", "1"]) == 0
+    out, err = capsys.readouterr()
+    assert f"{env_id}: success rate" in out and f"evaluating on {env_id}" in err
+
+
 def test_train_resumes_from_the_newest_checkpoint(tmp_path, capsys):
     common = ["train", "rigid_gym/Push-v0", "--out", str(tmp_path), "--eval-freq", "0",
               "--checkpoint-freq", "50"]

@@ -10,7 +10,7 @@ from gymnasium.utils.env_checker import check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import rigid_gym
-from rigid_gym.envs.base import CUBE_HALF, CUBE_MASS, STEP_TIME
+from rigid_gym.envs.task import CUBE_HALF, CUBE_MASS, STEP_TIME
 from rigid_gym.envs.effector import PAD_HALF_EXTENTS, Workspace
 from rigid_gym.envs.scripted import scripted_policy
 

@@ -23,6 +23,8 @@ from rigid_gym._core import STATIC
 from rigid_gym.cli import find_rerun
 from rigid_gym.envs.scripted import scripted_policy
 from rigid_gym.meshes import l_shape_mesh
+from rigid_gym import quaternion as quat
+from rigid_gym.recordable import Marker, Series
 from rigid_gym.recording import RecordRerun, WorldRecorder
 
 TASK_IDS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
@@ -207,6 +209,104 @@ def test_geometry_goals_and_layout_are_in_every_file_once(env_id, tmp_path):
         goals = {k for k in counts if k[0].startswith("/world/goals/")}
         assert goals and all(counts[k] == 1 for k in goals)
         assert counts[("/world", "ViewCoordinates:xyz")] == 1
+
+
+def static_values(path, entity: str, component: str) -> list:
+    """The static row of ``component`` at ``entity``: a list of its instances."""
+    for chunk in RrdReader(path).stream().filter(is_static=True, content=entity):
+        batch = chunk.to_record_batch()
+        if component in batch.schema.names:
+            return batch.column(component).to_pylist()[0]
+    raise AssertionError(f"{path} has no static {component} at {entity}")
+
+
+def blueprint_values(path, component: str) -> list:
+    """The first row of ``component`` in the layout beside ``path``: a list of instances."""
+    application_id = RrdReader(path).recordings()[0].application_id
+    reader = RrdReader(path.parent / f"{application_id}.rbl")
+    for chunk in reader.stream(store=reader.blueprints()[0]):
+        batch = chunk.to_record_batch()
+        if component in batch.schema.names:
+            return batch.column(component).to_pylist()[0]
+    raise AssertionError(f"the layout of {path} has no {component}")
+
+
+@pytest.mark.parametrize("env_id", TASK_IDS)
+def test_the_3d_view_looks_through_the_env_camera_and_every_series_is_named(env_id, tmp_path):
+    """The layout's 3D view tracks /world/camera, a Pinhole at the env camera's eye, looking
+    at its target, with its field of view (the view opens framed as render() frames); each
+    plot's lines have names and colours, all distinct."""
+    env = RecordRerun(gym.make(env_id, max_episode_steps=2), tmp_path,
+                      episode_trigger=lambda k: True, run="view")
+    run_episode(env, seed=0)
+    path = env.paths[0]
+    eye, target, fov = env.unwrapped.camera_view
+    np.testing.assert_allclose(static_values(path, "/world/camera", "Transform3D:translation")[0],
+                               eye, atol=1e-6)
+    xyzw_ = np.array(static_values(path, "/world/camera", "Transform3D:quaternion")[0])
+    forward = quat.rotate(xyzw_[[3, 0, 1, 2]], np.array([0.0, 0.0, 1.0]))  # RDF: z ahead
+    direction = np.subtract(target, eye)
+    np.testing.assert_allclose(forward, direction / np.linalg.norm(direction), atol=1e-6)
+    focal = static_values(path, "/world/camera", "Pinhole:image_from_camera")[0][0]
+    height = static_values(path, "/world/camera", "Pinhole:resolution")[0][1]
+    assert np.degrees(2 * np.arctan(0.5 * height / focal)) == pytest.approx(fov, abs=1e-4)
+    assert blueprint_values(path, "EyeControls3D:tracking_entity") == ["/world/camera"]
+    np.testing.assert_allclose(blueprint_values(path, "EyeControls3D:position")[0], eye,
+                               atol=1e-6)
+    np.testing.assert_allclose(blueprint_values(path, "EyeControls3D:look_target")[0], target,
+                               atol=1e-6)
+    actions = env.action_space.shape[0]
+    assert static_values(path, "/action", "SeriesLines:names") == ["x", "y", "z", "grip"][:actions]
+    assert static_values(path, "/reward", "SeriesLines:names") == ["reward"]
+    assert static_values(path, "/success", "SeriesLines:names") == ["success"]
+    colors = [c for name in ("/action", "/reward", "/success")
+              for c in static_values(path, name, "SeriesLines:colors")]
+    assert len(colors) == actions + 2 and len(set(colors)) == len(colors)
+
+
+class FallingBox(gym.Env):
+    """Not a rigid_gym task: a box falling onto the ground, recordable only through the
+    members of ``rigid_gym.recordable.Recordable``."""
+
+    observation_space = gym.spaces.Box(-np.inf, np.inf, (3,), np.float64)
+    action_space = gym.spaces.Box(-1.0, 1.0, (1,), np.float32)
+    camera_view = ((1.0, -1.0, 1.0), (0.0, 0.0, 0.2), 40.0)
+    scalar_series = (Series("height", ("box",), ((0.2, 0.4, 0.9),)),)
+
+    def __init__(self):
+        scene = rg.Scene()
+        scene.add_ground()
+        scene.add_body(rg.Box((0.05, 0.05, 0.05)), mass=1.0, position=(0.0, 0.0, 0.5),
+                       name="box")
+        self.world = rg.World(scene, dt=0.01)
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        self.world.reset()
+        return self.world.position[1].copy(), {}
+
+    def step(self, action):
+        self.world.step(4)
+        return self.world.position[1].copy(), 0.0, False, False, {}
+
+    def markers(self):
+        return [Marker(rg.Sphere(0.02), (0.0, 0.0, 0.02), (0.9, 0.2, 0.2), 0.5)]
+
+    def scalars(self, action, reward, info):
+        return [float(self.world.position[1, 2])]
+
+
+def test_an_env_of_another_kind_is_recorded_through_the_protocol(tmp_path):
+    env = RecordRerun(FallingBox(), tmp_path, episode_trigger=lambda k: True, run="box")
+    env.reset(seed=0)
+    heights = [env.step(env.action_space.sample())[0][2] for _ in range(5)]
+    env.close()
+    path = env.paths[0]
+    _, height = temporal(path, "/height", "Scalars:scalars")
+    np.testing.assert_array_equal(height.flatten().to_numpy(), heights)
+    assert static_values(path, "/height", "SeriesLines:names") == ["box"]
+    np.testing.assert_allclose(static_transform(path, "/world/goals/0"), [[0.0, 0.0, 0.02]])
+    assert views_beside(path) == {"3D": ["/world"], "TimeSeries": ["/height"]}
 
 
 def static_transform(path, entity: str) -> np.ndarray:

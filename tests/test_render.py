@@ -6,7 +6,7 @@ import pytest
 import rigid_gym as rg
 from rigid_gym.meshes import bowl_mesh, l_shape_mesh
 from rigid_gym.render import (
-    AMBIENT, BACKGROUND, GROUND_COLOR, Camera, Renderer, _corner_normals, tessellate,
+    AMBIENT, BACKGROUND, GROUND_COLOR, Camera, Renderer, corner_normals, tessellate,
 )
 
 IDENTITY = (1.0, 0.0, 0.0, 0.0)
@@ -258,9 +258,9 @@ def test_plane_patch_and_shading_normals():
     assert np.all(n[:, 2] > 0) and 0.5 * n[:, 2].sum() == pytest.approx(1.0)
     v, t = tessellate(rg.Sphere(1.0))
     radial = v[t].reshape(-1, 3)
-    assert np.einsum("ij,ij->i", _corner_normals(v, t), radial).min() > np.cos(np.radians(5.0))
+    assert np.einsum("ij,ij->i", corner_normals(v, t), radial).min() > np.cos(np.radians(5.0))
     v, t = tessellate(rg.Box((1.0, 2.0, 3.0)))
-    normals = _corner_normals(v, t)
+    normals = corner_normals(v, t)
     assert np.all(np.sort(np.abs(normals), axis=1) == [0.0, 0.0, 1.0])
 
 

@@ -89,7 +89,7 @@ def test_a_non_finite_copy_is_named():
     envs = gym.make_vec("rigid_gym/Push-v0", num_envs=3, vectorization_mode="vector_entry_point")
     envs.reset(seed=0)
     inner = envs.unwrapped
-    inner.world.state.velocity[1, inner.envs[1].cubes[0], 2] = np.nan
+    inner.world.state.velocity[1, inner.core.cubes[0], 2] = np.nan
     with pytest.raises(RuntimeError, match=r"PushEnv \(copy 1\): .*non-finite state"):
         envs.step(np.zeros((3, 3)))
 
@@ -170,7 +170,7 @@ def test_materials_can_be_randomized_per_copy():
     envs = gym.make_vec("rigid_gym/Push-v0", num_envs=4, vectorization_mode="vector_entry_point",
                         randomize={"mass": (0.5, 2.0), "friction": (0.5, 1.5)})
     envs.reset(seed=3)
-    masses = 1.0 / envs.unwrapped.world.model.inverse_mass[:, envs.unwrapped.envs[0].cubes[0]]
+    masses = 1.0 / envs.unwrapped.world.model.inverse_mass[:, envs.unwrapped.core.cubes[0]]
     assert len(set(masses.round(12))) == 4
     assert np.all((masses >= 0.05) & (masses <= 0.2))
 

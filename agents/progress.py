@@ -1,0 +1,23 @@
+"""What the long steps of training and evaluation show while they run: tqdm bars and notes on
+standard error (tqdm comes with the ``train`` extra, as the rest of ``rigid_gym.agents``)."""
+
+from __future__ import annotations
+
+import sys
+
+from tqdm import tqdm
+
+
+def bar(total: int, description: str, shown: bool, unit: str = "episode") -> tqdm:
+    """A progress bar of ``total`` ``unit``s: ``update(n)`` as they finish,
+    ``set_postfix_str`` for a figure so far, ``close()`` at the end. Nothing is drawn
+    unless ``shown``."""
+    return tqdm(total=total, desc=description, unit=unit, disable=not shown, leave=False,
+                file=sys.stderr, dynamic_ncols=True)
+
+
+def note(text: str, shown: bool) -> None:
+    """A line on standard error saying what starts now (if ``shown``), which does not break a
+    bar being drawn."""
+    if shown:
+        tqdm.write(text, file=sys.stderr)

@@ -1,0 +1,268 @@
+"""The batched core of every env: B copies of a task in one World, every array with a
+leading axis of B copies. ``gym.make`` runs a batch of one (B = 1, an unbatched World) and
+``gym.make_vec`` a batch of B (a batched World), through the same code: copy i of a batch
+plays exactly what a single env reset with the same seed plays.
+
+    core = TaskBatch(Push(), options, num_worlds=256, name="PushEnv")
+    first = core.reset(ALL, rngs)          # Outcome of every copy's new episode
+    outcome = core.step(actions)           # actions (B, a), checked and clipped
+
+Each copy draws from its own generator (``rngs[i]``: the randomisation factors, then the
+cubes' starts, the fixtures, the goal, and per observation its noise), in the order one env
+alone draws them. Resets write an episode into the World that exists (no Scene is built,
+nor geometry compiled, except when sizes are randomised); a step commands every gripper at
+once, runs SOLVER_STEPS solver steps of all worlds in one call and observes all copies.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from rigid_gym.scene import Scene
+from rigid_gym.shapes import Box
+from rigid_gym.world import World
+from rigid_gym.envs.effector import SuctionGripper, Workspace
+from rigid_gym.envs.options import Options
+from rigid_gym.envs.task import (CUBE_HALF, CUBE_MASS, FRICTION, GRIPPER_START, OBJECT_FEATURES,
+                                 ROTATION_FEATURES, SOLVER_STEPS, STEP_TIME, Task)
+
+ALL = slice(None)
+"""Every copy of a batch, where methods take the copies to act on."""
+
+
+class Outcome(NamedTuple):
+    """What copies observe after a reset or a step: ``observations`` {"observation",
+    "achieved_goal", "desired_goal"} of float32 (k, ...) arrays, ``rewards`` (k,) float64,
+    ``successes`` (k,) bool and ``terminated`` (k,) bool (success, where the episode ends
+    on success). After a reset the rewards are those of the start state."""
+
+    observations: dict
+    rewards: np.ndarray
+    successes: np.ndarray
+    terminated: np.ndarray
+
+
+class TaskBatch:
+    """B copies of ``task`` with the checked ``options``, in one World.
+
+    num_worlds: None for a single env (B = 1, an unbatched World, whose properties show no
+        world axis) or B >= 1 copies. name: the env's class name, for errors.
+    ``build`` makes the World: a vector env's at its construction, a single env's at its
+    first reset and again at every reset where sizes are randomised (only a batch of one
+    can randomise them: the copies of a World share its geometry).
+
+    State, every array with the leading copy axis: ``goals`` (B, goal_size) m, ``half``
+    (B, cubes) m the cubes' half edges, ``places`` (B, fixtures, 3) m, ``rngs`` (B,) each
+    copy's generator (None until its first reset); the World, its ``gripper``
+    (SuctionGripper) and the body indices ``cubes``, ``fixtures``, ``table``,
+    ``gripper_body``.
+    """
+
+    def __init__(self, task: Task, options: Options, num_worlds: int | None, name: str):
+        self.task, self.options, self.name = task, options, name
+        self.batched = num_worlds is not None
+        b = int(num_worlds) if self.batched else 1
+        self.num_worlds = b
+        self.rngs: list = [None] * b
+        self.goals = np.zeros((b, task.goal_size))
+        self.half = np.full((b, task.num_cubes), CUBE_HALF)
+        self.places = np.zeros((b, task.num_fixtures, 3))
+        # the goals as observed (float32), and as the goal test reads them (float64 of those)
+        self.desired = np.zeros((b, task.goal_size), dtype=np.float32)
+        self.desired64 = np.zeros((b, task.goal_size))
+        self.world: World | None = None
+        self.scene: Scene | None = None
+        self.gripper: SuctionGripper | None = None
+        self.cubes: list[int] = []
+        self.fixtures: list[int] = []
+        self.table = self.gripper_body = -1
+        # how observe reads the World's state (made with the World: observation_index)
+        self.first_cube, self.gather, self.flat_state = 0, np.zeros(0, dtype=np.intp), []
+
+    # -- the World --------------------------------------------------------------------------
+
+    def build(self, half: np.ndarray) -> None:
+        """The Scene and World of cubes with half edges ``half`` (cubes,) m, and the body
+        indices. Cubes get the nominal mass and friction (a reset sets each episode's through
+        ``set_material``, so a new World and a reused one reach an episode by the same
+        arithmetic); poses are the resets'. Restitution is the top of its randomisation
+        range: > 0 puts the collision phase into the World's config for every episode."""
+        restitution = self.options.randomization.get("restitution", (0.0, 0.0))[1]
+        scene = Scene()
+        self.table = scene.add_ground(friction=FRICTION, name="table")
+        self.cubes = [scene.add_body(Box((h, h, h)), mass=CUBE_MASS, position=(0.0, 0.0, h),
+                                     friction=FRICTION, restitution=restitution, name=f"cube{k}")
+                      for k, h in enumerate(half.tolist())]
+        self.gripper_body = scene.add_body(SuctionGripper.shape, kinematic=True,
+                                           position=GRIPPER_START, friction=FRICTION,
+                                           name="gripper")
+        self.fixtures = self.task.add_fixtures(scene)
+        self.scene = scene
+        # compiles the scene's geometry: ~4 ms
+        self.world = World(scene, dt=STEP_TIME / SOLVER_STEPS,
+                           num_worlds=self.num_worlds if self.batched else None)
+        self.gripper = SuctionGripper(self.world, self.gripper_body, self.cubes,
+                                      [(h, h, h) for h in half.tolist()], STEP_TIME, Workspace())
+        self.first_cube, self.gather = observation_index(len(scene.bodies), self.gripper_body,
+                                                         self.cubes, self.task.has_grip)
+        s = self.world.state  # the World's own buffers for its life: views of them stay valid
+        self.flat_state = [a.reshape(self.num_worlds, -1) for a in
+                           (s.position, s.velocity, s.rotation, s.angular_velocity)]
+
+    # -- episodes ---------------------------------------------------------------------------
+
+    def reset(self, copies, rngs: list) -> Outcome:
+        """Start a new episode in ``copies`` (ALL, or an int array of copy indices), copy
+        ``copies[i]`` drawing from ``rngs[i]`` (kept as its generator); returns their
+        Outcome."""
+        rows = np.arange(self.num_worlds)[copies]
+        for row, rng in zip(rows.tolist(), rngs):
+            self.rngs[row] = rng
+        ranges = self.options.randomization
+        n = self.task.num_cubes
+        # one factor per body and quantity: bodies are the cubes, then the gripper and table
+        factors = {name: np.array([rng.uniform(low, high, size=n + 2) for rng in rngs])
+                   for name, (low, high) in ranges.items()}
+        half = CUBE_HALF * factors["size"][:, :n] if "size" in ranges \
+            else np.full((len(rngs), n), CUBE_HALF)
+        starts = self.task.place_cubes(rngs, half)
+        places = self.task.place_fixtures(rngs)
+        if self.world is None or "size" in ranges:
+            self.build(half[0])
+        self.write(copies, rows, starts, places, factors)
+        self.half[copies] = half
+        self.places[copies] = places
+        goals = self.task.sample_goals(rngs, starts, half, places)
+        self.goals[copies] = goals
+        self.desired[copies] = goals
+        self.desired64[copies] = self.desired[copies]
+        return self.observe(copies)
+
+    def write(self, copies, rows: np.ndarray, starts: np.ndarray, places: np.ndarray,
+              factors: dict) -> None:
+        """Write the episodes drawn for ``copies`` (their indices ``rows``) into the World:
+        the scene's start (the gripper's pose, nothing moving, nothing held, time 0 when every
+        copy starts over), then the cubes' starts (k, cubes, 3) m, the fixtures' places
+        (k, fixtures, 3) m and, when randomised, the drawn materials (``factors`` {name:
+        (k, cubes + 2)}). Every copy at once takes one call per body (the World's setters
+        take (B, ...) values for all worlds); some copies take one each."""
+        w, n = self.world, self.task.num_cubes
+        if factors:  # factors of 1 (restitution 0) for what is not randomised
+            one = np.ones((len(rows), n + 2))
+            mass = CUBE_MASS * factors.get("mass", one)
+            friction = FRICTION * factors.get("friction", one)
+            restitution = factors.get("restitution", np.zeros_like(one))
+        targets = [(None, ALL)] if copies is ALL else list(zip(rows.tolist(), range(len(rows))))
+        for world, k in targets:
+            w.reset(world)
+            for j, body in enumerate(self.cubes):
+                w.set_pose(body, starts[k, j], world=world)  # a cube's centre of mass is its centre
+            for j, body in enumerate(self.fixtures):
+                w.set_pose(body, places[k, j], world=world)
+            if factors:
+                for j, cube in enumerate(self.cubes):
+                    w.set_material(cube, mass=mass[k, j], friction=friction[k, j],
+                                   restitution=restitution[k, j], world=world)
+                w.set_material(self.gripper_body, friction=friction[k, n], world=world)
+                w.set_material(self.table, friction=friction[k, n + 1], world=world)
+        self.gripper.forget(copies)
+
+    def step(self, actions: np.ndarray) -> Outcome:
+        """One env step of every copy: ``actions`` (B, action size), checked and clipped to
+        [-1, 1], command the grippers; the solver runs SOLVER_STEPS steps of every world in
+        one call (held objects carried in it); returns every copy's Outcome."""
+        grips = actions[:, 3] if self.task.has_grip else None
+        self.gripper.command(actions[:, :3], grips)
+        self.world.step(SOLVER_STEPS)
+        return self.observe(ALL)
+
+    # -- observations and rewards -----------------------------------------------------------
+
+    def observe(self, copies) -> Outcome:
+        """The Outcome of ``copies`` (ALL, or an int array) in their current state.
+
+        observation: the pad's position (3, m) and velocity (3, m/s), whether it holds a cube
+        (1, tasks with a grip), then per cube its position (3), position minus the pad's (3),
+        orientation (ROTATION_FEATURES), velocity (3) and angular velocity (3); achieved_goal:
+        the cubes' positions. Computed in float64, checked finite, noise added, then cast to
+        float32; the goal test and the reward read the float32 goals, exactly as
+        ``compute_reward`` sees them."""
+        k = self.task.num_cubes
+        count = self.num_worlds if copies is ALL else len(copies)
+        # one gather from the state arrays side by side (a few numpy calls whatever the
+        # number of cubes: a single env's step pays ~1 us for each call), then the offsets
+        # from the pad and the held flag written into their places
+        state = np.concatenate([a[copies] for a in self.flat_state], axis=1)
+        vectors = state[:, self.gather]
+        blocks = vectors[:, self.first_cube:].reshape(count, k, OBJECT_FEATURES)
+        blocks[:, :, 3:6] -= vectors[:, None, 0:3]  # each cube's position minus the pad's
+        if self.task.has_grip:
+            vectors[:, 6] = self.gripper.held[copies] >= 0
+        if not math.isfinite(np.add.reduce(vectors, axis=None)):  # a solver failure: say so
+            self.refuse_non_finite(vectors, copies)  # here, not in a network
+        achieved = blocks[:, :, 0:3].reshape(count, 3 * k).astype(np.float32)
+        noise = self.options.observation_noise
+        if noise > 0.0:
+            rngs = [self.rngs[i] for i in np.arange(self.num_worlds)[copies].tolist()]
+            vectors = vectors + np.array([rng.normal(0.0, noise, vectors.shape[1])
+                                          for rng in rngs])
+        achieved64 = achieved.astype(np.float64)
+        desired64 = self.desired64[copies]
+        successes = self.task.goal_reached(achieved64, desired64)
+        if self.options.reward_type == "sparse":
+            rewards = successes - 1.0  # the sparse reward, from the test just made
+        else:
+            rewards = self.task.reward(achieved64, desired64, "dense")
+        observations = {"observation": vectors.astype(np.float32), "achieved_goal": achieved,
+                        "desired_goal": self.desired[copies].copy()}
+        terminated = successes.copy() if self.options.terminate_on_success \
+            else np.zeros(count, dtype=bool)
+        return Outcome(observations, rewards, successes, terminated)
+
+    def refuse_non_finite(self, vectors: np.ndarray, copies) -> None:
+        """Raise the RuntimeError that names the first copy with a non-finite entry in its
+        observation ``vectors`` (k, size), if there is one (a finite sum can overflow)."""
+        finite = np.isfinite(vectors).all(axis=1)
+        if finite.all():
+            return
+        row = int(np.flatnonzero(~finite)[0])
+        copy = int(np.arange(self.num_worlds)[copies][row])
+        bad = np.flatnonzero(~np.isfinite(vectors[row])).tolist()
+        which = f" (copy {copy})" if self.num_worlds > 1 else ""
+        raise RuntimeError(f"{self.name}{which}: the simulation produced non-finite state "
+                           f"(observation entries {bad}) at t = {self.world.time:.3f} s")
+
+    def compute_reward(self, achieved_goal, desired_goal) -> np.ndarray:
+        """The reward of goals of shape (..., goal_size) -> (...) float64 (``Task.reward``
+        with the options' reward type)."""
+        return self.task.reward(np.asarray(achieved_goal, dtype=np.float64),
+                                np.asarray(desired_goal, dtype=np.float64),
+                                self.options.reward_type)
+
+    def markers(self, copy: int = 0) -> list:
+        """The goal markers of ``copy``'s episode (``Task.markers``)."""
+        return self.task.markers(self.goals[copy], self.half[copy])
+
+
+def observation_index(bodies: int, pad: int, cubes: list[int],
+                      grip: bool) -> tuple[int, np.ndarray]:
+    """Where ``TaskBatch.observe`` finds each observation entry in a copy's state laid side by
+    side: positions (bodies x 3), velocities (bodies x 3), rotations (bodies x 9, row-major),
+    angular velocities (bodies x 3). Returns the first cube's entry and the (size,) index:
+    the pad's position and velocity, the held flag's place (filled in afterwards), then per
+    cube its position, its position again (the pad's is subtracted afterwards), the first two
+    columns of its rotation (ROTATION_FEATURES), its velocity and angular velocity."""
+    n = bodies
+    position = lambda b: [3 * b + i for i in range(3)]  # noqa: E731
+    velocity = lambda b: [3 * n + 3 * b + i for i in range(3)]  # noqa: E731
+    columns = lambda b: [6 * n + 9 * b + 3 * row + column  # noqa: E731
+                         for column in range(ROTATION_FEATURES // 3) for row in range(3)]
+    spin = lambda b: [15 * n + 3 * b + i for i in range(3)]  # noqa: E731
+    index = position(pad) + velocity(pad) + ([0] if grip else [])
+    first = len(index)
+    for c in cubes:
+        index += position(c) + position(c) + columns(c) + velocity(c) + spin(c)
+    return first, np.array(index, dtype=np.intp)

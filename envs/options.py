@@ -1,0 +1,132 @@
+"""The arguments every task takes, checked once for the single and the batched env, and the
+check of the actions both are given."""
+
+from __future__ import annotations
+
+import math
+import reprlib
+from dataclasses import dataclass
+
+import numpy as np
+from gymnasium import spaces
+
+RENDER_MODES = ("rgb_array", "human")
+RANDOMIZATION = {
+    "mass": (0.5, 2.0),
+    "friction": (0.5, 1.5),
+    "restitution": (0.0, 0.3),
+    "size": (0.8, 1.2),
+}
+"""Default domain-randomisation ranges (low, high), each drawn uniformly once per reset:
+``mass`` and ``size`` scale each cube's mass and edge, ``friction`` scales every body's
+friction (one factor per body), ``restitution`` is each cube's coefficient."""
+
+ARGUMENTS_TABLE = """| argument | default | meaning |
+    |---|---|---|
+    | render_mode | None | "rgb_array" (480 x 480 frames, no display needed) or "human" (rerun viewer) |
+    | reward_type | "sparse" | "sparse" or "dense" (the ``Dense`` ids) |
+    | terminate_on_success | False | end the episode when the goal is reached |
+    | randomize | False | True, or a dict of ranges, to redraw cube mass, size, restitution and friction each reset (``rigid_gym.envs.options.RANDOMIZATION``) |
+    | observation_noise | 0.0 | standard deviation of Gaussian noise on ``observation`` |"""
+"""The constructor arguments every task shares, as its docstring's "Arguments" table."""
+
+
+@dataclass(frozen=True)
+class Options:
+    """A task's arguments, checked (``Options.checked``): render_mode (None or one of
+    RENDER_MODES), reward_type ("sparse" or "dense"), terminate_on_success,
+    randomization ({name: (low, high)}, the ranges in use: ``randomize`` resolved) and
+    observation_noise (standard deviation, >= 0)."""
+
+    render_mode: str | None
+    reward_type: str
+    terminate_on_success: bool
+    randomization: dict
+    observation_noise: float
+
+    @classmethod
+    def checked(cls, where: str, render_mode: str | None = None, reward_type: str = "sparse",
+                terminate_on_success: bool = False, randomize: bool | dict = False,
+                observation_noise: float = 0.0) -> Options:
+        """The arguments of ARGUMENTS_TABLE, or a ValueError that starts with ``where``
+        (the env class's name)."""
+        if render_mode is not None and render_mode not in RENDER_MODES:
+            raise ValueError(f"{where}: render_mode must be None or one of "
+                             f"{list(RENDER_MODES)}, got {render_mode!r}")
+        if reward_type not in ("sparse", "dense"):
+            raise ValueError(f"{where}: reward_type must be 'sparse' or 'dense', "
+                             f"got {reward_type!r}")
+        if not isinstance(terminate_on_success, bool):
+            raise ValueError(f"{where}: terminate_on_success must be a bool, "
+                             f"got {terminate_on_success!r}")
+        noise = float(observation_noise)
+        if not np.isfinite(noise) or noise < 0.0:
+            raise ValueError(f"{where}: observation_noise must be a finite standard "
+                             f"deviation >= 0, got {observation_noise!r}")
+        return cls(render_mode, reward_type, terminate_on_success,
+                   randomization_ranges(randomize, where), noise)
+
+
+def randomization_ranges(randomize, where: str) -> dict:
+    """``randomize``: False (off), True (RANDOMIZATION) or a dict naming some of its keys with
+    (low, high) ranges. Returns the ranges in use."""
+    if isinstance(randomize, bool):
+        return dict(RANDOMIZATION) if randomize else {}
+    if not isinstance(randomize, dict):
+        raise ValueError(f"{where}: randomize must be a bool or a dict of ranges, "
+                         f"got {randomize!r}")
+    unknown = set(randomize) - set(RANDOMIZATION)
+    if unknown:
+        raise ValueError(f"{where}: randomize has unknown key(s) {sorted(unknown)}; "
+                         f"allowed: {sorted(RANDOMIZATION)}")
+    ranges = {}
+    for name, value in randomize.items():
+        try:
+            low, high = (float(v) for v in value)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{where}: randomize[{name!r}] must be a (low, high) pair, "
+                             f"got {value!r}") from exc
+        floor, ceiling = (0.0, 1.0) if name == "restitution" else (1e-3, 1e3)
+        if not floor <= low <= high <= ceiling:
+            raise ValueError(f"{where}: randomize[{name!r}] must satisfy {floor} <= low <= high "
+                             f"<= {ceiling}, got {value!r}")
+        ranges[name] = (low, high)
+    return ranges
+
+
+def checked_actions(values, space: spaces.Box, what: str) -> np.ndarray:
+    """``values`` as float64 clipped to [-1, 1], if they are a real numeric array of
+    ``space``'s shape whose entries are all finite; otherwise a ValueError naming ``what``
+    (the env and the argument: "PushEnv.step: action"). A batch ((B, a) actions) names the
+    copies whose actions are not finite."""
+    actions = real_array(values, what, space)
+    if actions.shape != space.shape:
+        raise ValueError(f"{what} must have shape {space.shape}, got {actions.shape}")
+    # a finite sum means every entry is finite; only a sum that is not (an overflow, or a
+    # NaN or inf entry) pays for the entry-by-entry test
+    if not math.isfinite(np.add.reduce(actions, axis=None)) and not np.isfinite(actions).all():
+        if actions.ndim == 1:
+            raise ValueError(f"{what} must be finite (NaN and inf are refused), "
+                             f"got {actions.tolist()}")
+        bad = np.flatnonzero(~np.isfinite(actions).all(axis=1)).tolist()
+        raise ValueError(f"{what} must be finite (NaN and inf are refused); copies {bad} "
+                         f"are not")
+    return np.minimum(np.maximum(actions, -1.0), 1.0)  # documented: outside [-1, 1] is clipped
+
+
+def real_array(values, what: str, space: spaces.Box) -> np.ndarray:
+    """``values`` as a float64 array, if they are a real numeric array (or nested sequence) of
+    bool, int or float of any width; otherwise a ValueError naming ``what`` (the env and the
+    argument) and the expected ``space``. Strings (even "0.5"), complex numbers, objects and
+    dicts are refused: numpy would parse the first, drop the imaginary part of the second and
+    fail with a bare message on the rest. Shape and finiteness are the caller's to check."""
+    try:
+        array = np.asarray(values)
+    except (TypeError, ValueError):  # ragged nesting, or an object numpy cannot take
+        array = None
+    if array is None or array.dtype.kind not in "biuf":
+        got = (f"an array of dtype {values.dtype}" if isinstance(values, np.ndarray)
+               else f"{type(values).__name__} {reprlib.repr(values)}")
+        raise ValueError(f"{what} must be a real numeric array (bool, int or float) in "
+                         f"{space}, got {got}")
+    return array.astype(np.float64, copy=False)

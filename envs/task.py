@@ -1,0 +1,124 @@
+"""What a task is (Push, Stack, Throw): its cubes, fixtures, goal, goal test and markers, written
+once over a batch of copies, and the constants every task shares.
+
+A ``Task`` holds no state. Its methods take the copies being reset as arrays with a leading
+axis of k copies (``half`` (k, cubes) m, ...), and one random generator per copy, from which
+each copy draws exactly what one env alone would draw, in the same order: a copy of a batch
+plays what a single env reset with the same seed plays (``envs/core.py`` runs the batch).
+
+Conventions (those of panda-gym and Gymnasium-Robotics Fetch, so their HER settings transfer):
+0.04 s per env step (10 solver steps of 4 ms), goals of 3 numbers per cube, 0.05 m thresholds.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rigid_gym.recordable import Marker
+from rigid_gym.scene import Scene
+
+STEP_TIME = 0.04
+"""s of simulated time per env step."""
+SOLVER_STEPS = 10
+"""solver steps per env step (dt = 4 ms, as panda-gym's 2 ms x 20 and Fetch's 2 ms x 20)."""
+DISTANCE_THRESHOLD = 0.05
+"""m: a goal position is reached within this distance."""
+CUBE_HALF = 0.02
+"""m: half the edge of every task's cubes (4 cm cubes, as panda-gym's)."""
+CUBE_MASS = 0.1
+"""kg"""
+FRICTION = 0.5
+"""Coulomb coefficient of table, cubes and gripper (a pair uses sqrt(mu_a mu_b))."""
+GRIPPER_START = (0.0, 0.0, 0.12)
+"""m: the gripper's centre at reset."""
+ROTATION_FEATURES = 6
+"""An orientation is observed as the first two columns of its rotation matrix (continuous,
+unlike a quaternion's sign or Euler angles)."""
+OBJECT_FEATURES = 3 + 3 + ROTATION_FEATURES + 3 + 3
+"""Observed per cube: position, position minus the pad's, orientation, velocity, angular
+velocity."""
+MARKER_ALPHA = 0.45
+"""Opacity of goal markers in rendered frames and recordings."""
+GOAL_COLOR = (0.2, 0.8, 0.3)
+"""Colour of a goal marker that belongs to no cube in particular."""
+
+
+class Task:
+    """Base of every task. A subclass sets ``num_cubes``, ``has_grip``, ``goal_size`` (and
+    ``camera_view`` if the default does not suit) and implements ``place_cubes``,
+    ``sample_goals``, ``goal_reached`` and ``markers``; a task with static bodies beyond the
+    table (Throw's bin) also ``place_fixtures`` and ``add_fixtures``."""
+
+    num_cubes: int = 1
+    has_grip: bool = False
+    goal_size: int = 3
+    camera_view = ((0.36, -0.48, 0.4), (0.0, 0.0, 0.03), 30.0)
+    """(eye (m), target (m), vertical field of view (deg)) of the rgb_array camera: the
+    workspace from the front right, above."""
+    num_fixtures: int = 0
+
+    def place_cubes(self, rngs: list, half: np.ndarray) -> np.ndarray:
+        """Start positions (k, cubes, 3) m of the cubes with half edges ``half`` (k, cubes) m,
+        copy i's from ``rngs[i]``; the cubes start resting and unrotated."""
+        raise NotImplementedError
+
+    def place_fixtures(self, rngs: list) -> np.ndarray:
+        """Places (k, fixtures, 3) m of the static bodies beyond the table, drawn after the
+        cubes' starts; none by default."""
+        return np.zeros((len(rngs), 0, 3))
+
+    def add_fixtures(self, scene: Scene) -> list[int]:
+        """Add the static bodies beyond the table (placed each reset at ``place_fixtures``'
+        places) to ``scene``; returns their body indices."""
+        return []
+
+    def sample_goals(self, rngs: list, starts: np.ndarray, half: np.ndarray,
+                     places: np.ndarray) -> np.ndarray:
+        """Goals (k, goal_size) m of copies whose cubes start at ``starts`` (k, cubes, 3) m
+        with half edges ``half`` (k, cubes) and fixtures at ``places`` (k, fixtures, 3) m,
+        drawn after the fixtures."""
+        raise NotImplementedError
+
+    def goal_reached(self, achieved_goal: np.ndarray, desired_goal: np.ndarray) -> np.ndarray:
+        """(..., goal_size) goals -> (...) bool. Reads only the goals, so that HER can
+        relabel them."""
+        raise NotImplementedError
+
+    def markers(self, goal: np.ndarray, half: np.ndarray) -> list[Marker]:
+        """The markers of one copy's goal (goal_size,) m, its cubes' half edges (cubes,) m."""
+        raise NotImplementedError
+
+    def reward(self, achieved_goal: np.ndarray, desired_goal: np.ndarray,
+               reward_type: str) -> np.ndarray:
+        """Reward of goals (..., goal_size) -> (...) float64: ``"sparse"`` -1 / 0 (0 where
+        ``goal_reached``), ``"dense"`` minus the Euclidean distance between the goals (m)."""
+        if reward_type == "dense":
+            return -distance(achieved_goal - desired_goal)
+        return self.goal_reached(achieved_goal, desired_goal) - 1.0
+
+
+def distance(offset: np.ndarray) -> np.ndarray:
+    """Euclidean length of ``offset`` (..., d) along its last axis -> (...): the bits of
+    ``np.linalg.norm(offset, axis=-1)`` without its argument handling (a few microseconds,
+    which a step of a single env would pay several times)."""
+    return np.sqrt(np.add.reduce(offset * offset, axis=-1))
+
+
+def cube_anywhere(rngs: list, half: np.ndarray, half_range: float) -> np.ndarray:
+    """Starts (k, 1, 3) m of a task's one cube with half edges ``half`` (k, 1) m: at x, y
+    uniform in [-half_range, half_range] m (copy i's from ``rngs[i]``), resting on the table."""
+    xy = np.array([rng.uniform(-half_range, half_range, size=2) for rng in rngs])
+    return np.concatenate([xy, half[:, :1]], axis=1)[:, None]
+
+
+def sample_apart(rng: np.random.Generator, half_range: float, others, min_distance: float,
+                 tries: int = 1000) -> np.ndarray:
+    """A point (2,) uniform in [-half_range, half_range]^2 (m) at least ``min_distance`` (m)
+    from every point in ``others`` (each (2,) or more; x, y are used); rejection sampling
+    from ``rng``."""
+    for _ in range(tries):
+        point = rng.uniform(-half_range, half_range, size=2)
+        if all(np.linalg.norm(point - np.asarray(o)[:2]) >= min_distance for o in others):
+            return point
+    raise RuntimeError(f"sample_apart: no point {min_distance} m from {len(others)} others in "
+                       f"{tries} tries; the ranges are too tight")
