@@ -18,7 +18,9 @@
    ``gym.make_vec(env_id, num_envs=B, vectorization_mode="vector_entry_point")`` at B = 1,
    16, 256 and 1024, actions from a seeded generator of shape (B, action size), resets left to
    the vector env and included (each timing is a whole number of episodes, so every copy
-   resets in it); "not available" where a task registers no vector entry point.
+   resets in it); then Push under its scripted policy, the policy's time left out (it
+   pushes the cube most of the time, which random actions rarely touch); "not available"
+   where a task registers no vector entry point.
 
 The header line names the machine and the versions. One world runs on the calling thread
 only; batched worlds are shared out over the core's threads (``rigid_gym._core.num_threads``,
@@ -46,6 +48,7 @@ import numpy as np
 import rigid_gym as rg
 from rigid_gym import _core
 from rigid_gym._core import DYNAMIC
+from rigid_gym.envs.scripted import scripted_policy
 from rigid_gym.report import peers
 from rigid_gym.report.scenes import cube_stack, pile, pyramid
 
@@ -58,6 +61,8 @@ PEERS = {"MuJoCo": ("mujoco", peers.MuJoCoWorld), "PyBullet": ("pybullet", peers
 ENGINES = ("ours", *PEERS)
 BATCH_SIZES = (1, 16, 256, 1024)
 QUICK_BATCH_SIZES = (1, 16)
+SCRIPTED_BATCHED = "rigid_gym/Push-v0"
+"""The task timed batched under its scripted policy too."""
 BATCH_WARMUP = 5
 """Untimed vector steps before the timings (first allocations, caches)."""
 
@@ -259,31 +264,43 @@ def has_vector_env(env_id: str) -> bool:
     return getattr(gym.spec(env_id), "vector_entry_point", None) is not None
 
 
-def batched_rate(env_id: str, batch: int, steps: int, repeats: int) -> float:
+def batched_rate(env_id: str, batch: int, steps: int, repeats: int,
+                 scripted: bool = False) -> float:
     """Median env steps/s (batch x vector steps per second) of ``gym.make_vec`` with ``batch``
     envs over ``repeats`` timings of at least ``steps`` env steps, each a whole number of
     episodes of vector steps: the copies start together and random actions never end an
     episode early, so every copy resets exactly once per episode length in every timing
     (timings of 10 vector steps let the median leave the resets out: at B = 1024 only one
-    timing in five had them)."""
+    timing in five had them). ``scripted``: actions from the task's scripted policy, copy by
+    copy, whose time is left out (only ``envs.step`` is timed); its episodes touch the cubes
+    all the time, where random actions touch them rarely."""
     envs = gym.make_vec(env_id, num_envs=batch, vectorization_mode="vector_entry_point")
     space = envs.single_action_space
     rng = np.random.default_rng(0)
-    envs.reset(seed=0)
+    observations, _ = envs.reset(seed=0)
     episode = envs.unwrapped.max_episode_steps
+    if scripted:
+        policy = scripted_policy(gym.make(env_id))
 
-    def run(count):
+    def actions(observations):
+        if not scripted:
+            return rng.uniform(space.low, space.high, (batch, *space.shape)).astype(space.dtype)
+        return np.array([policy({key: value[i] for key, value in observations.items()})
+                         for i in range(batch)], dtype=space.dtype)
+
+    def run(count) -> float:
+        nonlocal observations
+        seconds = 0.0
         for _ in range(count):
-            envs.step(rng.uniform(space.low, space.high, (batch, *space.shape))
-                      .astype(space.dtype))
+            chosen = actions(observations)
+            start = time.perf_counter()
+            observations = envs.step(chosen)[0]
+            seconds += time.perf_counter() - start
+        return seconds
 
     run(BATCH_WARMUP)
     vector_steps = episode * max(1, -(-steps // (batch * episode)))
-    rates = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        run(vector_steps)
-        rates.append(batch * vector_steps / (time.perf_counter() - start))
+    rates = [batch * vector_steps / run(vector_steps) for _ in range(repeats)]
     envs.close()
     return statistics.median(rates)
 
@@ -292,15 +309,18 @@ def batched_section(quick: bool, repeats: int) -> None:
     steps = 200 if quick else 1000
     sizes = QUICK_BATCH_SIZES if quick else BATCH_SIZES
     print(f"\nBatched env steps/s, gym.make_vec(vectorization_mode=\"vector_entry_point\"), "
-          f"B x vector steps per second (median of {repeats} timings)\n")
+          f"B x vector steps per second (median of {repeats} timings; random actions, and "
+          "Push under its scripted policy, whose time is left out)\n")
     print("| env | " + " | ".join(f"B = {b}" for b in sizes) + " |")
     print("|---|" + "---|" * len(sizes))
-    for env_id in ENV_BENCHMARK.TASKS:
+    rows = [(env_id, False) for env_id in ENV_BENCHMARK.TASKS] + [(SCRIPTED_BATCHED, True)]
+    for env_id, scripted in rows:
+        label = f"{env_id}, scripted policy" if scripted else env_id
         if not has_vector_env(env_id):
             cells = ["not available (no vector_entry_point)"] * len(sizes)
         else:
-            cells = [f"{batched_rate(env_id, b, steps, repeats):,.0f}" for b in sizes]
-        print(f"| {env_id} | " + " | ".join(cells) + " |", flush=True)
+            cells = [f"{batched_rate(env_id, b, steps, repeats, scripted):,.0f}" for b in sizes]
+        print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
 
 
 def main() -> None:
