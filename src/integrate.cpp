@@ -134,9 +134,9 @@ void update_velocities(const BodyStates& bodies, const BodyModel& model, double 
 }
 
 void update_positions(const BodyStates& bodies, const BodyModel& model, double dt, int order,
-                      bool keep_energy, Span<const int64_t> listed) {
+                      bool keep_energy, Span<const int64_t> listed, Span<const uint8_t> asleep) {
     for (int64_t i = 0; i < bodies.position.size; ++i) {
-        if (model.motion[i] == STATIC) {
+        if (model.motion[i] == STATIC || (asleep.size > 0 && asleep[i])) {
             continue;
         }
         Vec3& x = bodies.position[i];

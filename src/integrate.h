@@ -44,8 +44,11 @@ void update_velocities(const BodyStates& bodies, const BodyModel& model, double 
 // impulse stages would move its contact points off the poses the impulses were computed for
 // (a tumbling cube's corner dug 28 mm into the ground), and its energy is the impulses' to
 // change anyway.
+// Bodies with asleep[i] set (sleep.h; asleep empty without sleeping) are left as they are:
+// their velocities are the last step's final ones, which moved them nowhere (the step is a
+// fixed point for them), so updating them would give the same bits.
 void update_positions(const BodyStates& bodies, const BodyModel& model, double dt, int order,
-                      bool keep_energy, Span<const int64_t> listed);
+                      bool keep_energy, Span<const int64_t> listed, Span<const uint8_t> asleep);
 
 // Put every attached body at its offset from its parent, moving with the parent's velocity
 // and not turning.

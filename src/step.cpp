@@ -167,7 +167,9 @@ int64_t step_world(WorldStep& w, int64_t steps, int phases, double dt) {
             }
             count_pairs_of_bodies(w, *w.pair_count);
             update_positions(w.bodies, w.model, dt, c.rotation_order, c.keep_energy,
-                             {w.pairs_of.data, w.pairs_of.size});
+                             {w.pairs_of.data, w.pairs_of.size},
+                             c.sleep ? Span<const uint8_t>{w.rest.asleep.data, w.rest.asleep.size}
+                                     : Span<const uint8_t>{});
             for (int i = 0; i < w.num_bodies(); ++i) {
                 w.bodies.force[i] = {0.0, 0.0, 0.0};
                 w.bodies.torque[i] = {0.0, 0.0, 0.0};
