@@ -16,11 +16,11 @@ once, runs SOLVER_STEPS solver steps of all worlds in one call and observes all 
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
 
+from rigid_gym._core import gather_observations
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Box
 from rigid_gym.world import World
@@ -79,8 +79,11 @@ class TaskBatch:
         self.cubes: list[int] = []
         self.fixtures: list[int] = []
         self.table = self.gripper_body = -1
-        # how observe reads the World's state (made with the World: observation_index)
-        self.first_cube, self.gather, self.flat_state = 0, np.zeros(0, dtype=np.intp), []
+        # how observe reads the World's state (made with the World: observation_index), and
+        # where the achieved goal (the cubes' positions) lies in an observation
+        empty = np.zeros(0, dtype=np.int64)
+        self.gather, self.minus, self.achieved_columns = empty, empty, empty
+        self.all_worlds = np.arange(b, dtype=np.int64)
 
     # -- the World --------------------------------------------------------------------------
 
@@ -106,11 +109,10 @@ class TaskBatch:
                            num_worlds=self.num_worlds if self.batched else None)
         self.gripper = SuctionGripper(self.world, self.gripper_body, self.cubes,
                                       [(h, h, h) for h in half.tolist()], STEP_TIME, Workspace())
-        self.first_cube, self.gather = observation_index(len(scene.bodies), self.gripper_body,
-                                                         self.cubes, self.task.has_grip)
-        s = self.world.state  # the World's own buffers for its life: views of them stay valid
-        self.flat_state = [a.reshape(self.num_worlds, -1) for a in
-                           (s.position, s.velocity, s.rotation, s.angular_velocity)]
+        first_cube, self.gather, self.minus = observation_index(
+            len(scene.bodies), self.gripper_body, self.cubes, self.task.has_grip)
+        self.achieved_columns = np.array([first_cube + OBJECT_FEATURES * j + i
+                                          for j in range(len(self.cubes)) for i in range(3)])
 
     # -- episodes ---------------------------------------------------------------------------
 
@@ -190,23 +192,19 @@ class TaskBatch:
         the cubes' positions. Computed in float64, checked finite, noise added, then cast to
         float32; the goal test and the reward read the float32 goals, exactly as
         ``compute_reward`` sees them."""
-        k = self.task.num_cubes
-        count = self.num_worlds if copies is ALL else len(copies)
-        # one gather from the state arrays side by side (a few numpy calls whatever the
-        # number of cubes: a single env's step pays ~1 us for each call), then the offsets
-        # from the pad and the held flag written into their places
-        state = np.concatenate([a[copies] for a in self.flat_state], axis=1)
-        vectors = state[:, self.gather]
-        blocks = vectors[:, self.first_cube:].reshape(count, k, OBJECT_FEATURES)
-        blocks[:, :, 3:6] -= vectors[:, None, 0:3]  # each cube's position minus the pad's
+        worlds = self.all_worlds[copies]
+        s = self.world.state
+        vectors = np.empty((len(worlds), len(self.gather)))
+        finite = gather_observations(s.position, s.velocity, s.rotation, s.angular_velocity,
+                                     worlds, self.gather, self.minus, vectors)
         if self.task.has_grip:
             vectors[:, 6] = self.gripper.held[copies] >= 0
-        if not math.isfinite(np.add.reduce(vectors, axis=None)):  # a solver failure: say so
-            self.refuse_non_finite(vectors, copies)  # here, not in a network
-        achieved = blocks[:, :, 0:3].reshape(count, 3 * k).astype(np.float32)
+        if not finite:  # a solver failure: say so here, not in a network
+            self.refuse_non_finite(vectors, copies)
+        achieved = vectors[:, self.achieved_columns].astype(np.float32)
         noise = self.options.observation_noise
         if noise > 0.0:
-            rngs = [self.rngs[i] for i in np.arange(self.num_worlds)[copies].tolist()]
+            rngs = [self.rngs[i] for i in worlds.tolist()]
             vectors = vectors + np.array([rng.normal(0.0, noise, vectors.shape[1])
                                           for rng in rngs])
         achieved64 = achieved.astype(np.float64)
@@ -219,15 +217,13 @@ class TaskBatch:
         observations = {"observation": vectors.astype(np.float32), "achieved_goal": achieved,
                         "desired_goal": self.desired[copies].copy()}
         terminated = successes.copy() if self.options.terminate_on_success \
-            else np.zeros(count, dtype=bool)
+            else np.zeros(len(worlds), dtype=bool)
         return Outcome(observations, rewards, successes, terminated)
 
     def refuse_non_finite(self, vectors: np.ndarray, copies) -> None:
         """Raise the RuntimeError that names the first copy with a non-finite entry in its
-        observation ``vectors`` (k, size), if there is one (a finite sum can overflow)."""
+        observation ``vectors`` (k, size), which has one."""
         finite = np.isfinite(vectors).all(axis=1)
-        if finite.all():
-            return
         row = int(np.flatnonzero(~finite)[0])
         copy = int(np.arange(self.num_worlds)[copies][row])
         bad = np.flatnonzero(~np.isfinite(vectors[row])).tolist()
@@ -248,13 +244,14 @@ class TaskBatch:
 
 
 def observation_index(bodies: int, pad: int, cubes: list[int],
-                      grip: bool) -> tuple[int, np.ndarray]:
+                      grip: bool) -> tuple[int, np.ndarray, np.ndarray]:
     """Where ``TaskBatch.observe`` finds each observation entry in a copy's state laid side by
-    side: positions (bodies x 3), velocities (bodies x 3), rotations (bodies x 9, row-major),
-    angular velocities (bodies x 3). Returns the first cube's entry and the (size,) index:
-    the pad's position and velocity, the held flag's place (filled in afterwards), then per
-    cube its position, its position again (the pad's is subtracted afterwards), the first two
-    columns of its rotation (ROTATION_FEATURES), its velocity and angular velocity."""
+    side (``gather_observations``): positions (bodies x 3), velocities (bodies x 3), rotations
+    (bodies x 9, row-major), angular velocities (bodies x 3). Returns the first cube's entry,
+    the (size,) index and the (size,) entries subtracted (-1: none): the pad's position and
+    velocity, the held flag's place (filled in afterwards), then per cube its position, its
+    position minus the pad's, the first two columns of its rotation (ROTATION_FEATURES), its
+    velocity and angular velocity."""
     n = bodies
     position = lambda b: [3 * b + i for i in range(3)]  # noqa: E731
     velocity = lambda b: [3 * n + 3 * b + i for i in range(3)]  # noqa: E731
@@ -263,6 +260,9 @@ def observation_index(bodies: int, pad: int, cubes: list[int],
     spin = lambda b: [15 * n + 3 * b + i for i in range(3)]  # noqa: E731
     index = position(pad) + velocity(pad) + ([0] if grip else [])
     first = len(index)
+    minus = [-1] * first
     for c in cubes:
-        index += position(c) + position(c) + columns(c) + velocity(c) + spin(c)
-    return first, np.array(index, dtype=np.intp)
+        block = position(c) + position(c) + columns(c) + velocity(c) + spin(c)
+        index += block
+        minus += [-1] * 3 + position(pad) + [-1] * (len(block) - 6)
+    return first, np.array(index, dtype=np.int64), np.array(minus, dtype=np.int64)

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rigid_gym._core import lowest_centres
+from rigid_gym._core import command_pads
 from rigid_gym.shapes import Box
 
 STEP_DISTANCE = 0.05
@@ -66,17 +66,12 @@ class SuctionGripper:
         self.step_time = step_time
         self.workspace = workspace
         self.held = np.full(world.num_worlds, -1, dtype=np.int64)
-        k = len(self.objects)
-        # what every command passes to numpy and the core, made once: the workspace as (1, 3)
-        # arrays (numpy converts a tuple anew at every call, and a (B, 3) array against a
-        # (1, 3) one takes its fast path: half the time of one against a (3,)), the pad's
-        # size, lowest_centres' work arrays (the pad and the held object, then the objects)
-        # and its output
-        self.low, self.high = np.array([workspace.low]), np.array([workspace.high])
+        k, b = len(self.objects), world.num_worlds
+        # what every command passes to the core, made once: the workspace, the pad's size and
+        # command_pads' work arrays (the objects' poses, the targets and their lowest z)
+        self.low, self.high = np.array(workspace.low), np.array(workspace.high)
         self.pad_half = np.array(PAD_HALF_EXTENTS)
-        self.work = (np.empty((2, 3)), np.empty((2, 3, 3)), np.empty((2, 3)), np.empty((k, 3)),
-                     np.empty((k, 3, 3)))
-        self.lowest = np.empty(world.num_worlds)
+        self.work = (np.empty((k, 3)), np.empty((k, 3, 3)), np.empty((b, 3)), np.empty(b))
         # a contact within GRIP_MARGIN needs the centres within the two bounding spheres
         reach = (np.linalg.norm(self.pad_half) + np.linalg.norm(self.half_extents, axis=1)
                  + GRIP_MARGIN + REACH_SLACK)
@@ -97,14 +92,11 @@ class SuctionGripper:
         ``STEP_DISTANCE``; ``grips`` (B,): > 0 closes the suction, <= 0 opens it; None
         (tasks without a grip) leaves it open."""
         s = self.world.state
-        position = s.position[:, self.body]
-        target = np.minimum(np.maximum(position + STEP_DISTANCE * motions, self.low), self.high)
-        lowest_centres(target, s.position, s.rotation, self.body, self.pad_half, self.objects,
-                       self.half_extents, self.held, *self.work, self.lowest)
-        target[:, 2] = np.maximum(target[:, 2], np.minimum(position[:, 2], self.lowest))
-        # written into the state as World.set_velocity would (it never turns: omega stays 0),
-        # without its checks: the target is finite by construction
-        s.velocity[:, self.body] = (target - position) / self.step_time
+        # the velocity written into the state as World.set_velocity would (it never turns:
+        # omega stays 0), without its checks: the target is finite by construction
+        command_pads(np.ascontiguousarray(motions), s.position, s.rotation, s.velocity, self.body, self.pad_half,
+                     self.objects, self.half_extents, self.held, self.low, self.high,
+                     STEP_DISTANCE, self.step_time, *self.work)
         if grips is not None:
             self.grip(grips)
 

@@ -1,4 +1,4 @@
-// The gripper's lowest centre over the boxes under it (footprint.h).
+// The gripper's command and its lowest centre over the boxes under it (footprint.h).
 #include "footprint.h"
 
 #include <algorithm>
@@ -133,6 +133,28 @@ void lowest_centres(const FootprintQuery& q, Span<double> out) {
             q.boxes_r[k] = q.rotations[first + q.objects[k]];
         }
         out[w] = lowest_centre(q, target.z, target.z - pad.z, parts, h);
+    }
+}
+
+void command_pads(FootprintQuery query, const PadCommand& c) {
+    const int64_t worlds = c.motions.size;
+    for (int64_t w = 0; w < worlds; ++w) {
+        const Vec3 pad = query.positions[w * query.num_bodies + query.pad], m = c.motions[w];
+        const Vec3 moved = {pad.x + c.step_distance * m.x, pad.y + c.step_distance * m.y,
+                            pad.z + c.step_distance * m.z};
+        c.targets[w] = {std::min(std::max(moved.x, c.low.x), c.high.x),
+                        std::min(std::max(moved.y, c.low.y), c.high.y),
+                        std::min(std::max(moved.z, c.low.z), c.high.z)};
+    }
+    query.targets = {c.targets.data, c.targets.size};
+    lowest_centres(query, c.lowest);
+    for (int64_t w = 0; w < worlds; ++w) {
+        const int64_t body = w * query.num_bodies + query.pad;
+        const Vec3 pad = query.positions[body];
+        Vec3 target = c.targets[w];
+        target.z = std::max(target.z, std::min(pad.z, c.lowest[w]));
+        c.velocities[body] = {(target.x - pad.x) / c.step_time, (target.y - pad.y) / c.step_time,
+                              (target.z - pad.z) / c.step_time};
     }
 }
 

@@ -1,7 +1,8 @@
-// How low a box may go before it lands on the table or on top of another box.
+// The envs' gripper command: where the pad goes in an env step, and how low it may go before
+// it, or the box it holds, lands on the table or on top of another box.
 //
-// The envs' gripper stops a downward move where the pad, or the object it holds, would rest on
-// the table (z = 0) or on the top of a free box under its footprint (envs/effector.py).
+// The gripper stops a downward move where the pad, or the object it holds, would rest on the
+// table (z = 0) or on the top of a free box under its footprint (envs/effector.py).
 // Footprints are the boxes' shadows on the table, compared by separating axes in the plane.
 #pragma once
 
@@ -39,5 +40,23 @@ struct FootprintQuery {
 // as under a part if its top is below the part's bottom before the move (the part's bottom at
 // the target minus the move's z, m); the held box is ignored.
 void lowest_centres(const FootprintQuery& query, Span<double> out);
+
+// One env step's command of every world's pad (the query's targets are ignored: the targets
+// are made here).
+struct PadCommand {
+    Span<const Vec3> motions;  // (B,) each axis in [-1, 1]
+    double step_distance = 0;  // m of motion per unit, along each axis
+    Vec3 low = {}, high = {};  // m, the workspace the pad's centre stays in
+    double step_time = 0;      // s, the env step
+    Span<Vec3> velocities;     // (B n,) m/s, every body of every world: the pads' are written
+    Span<Vec3> targets;        // (B,) m, work rows
+    Span<double> lowest;       // (B,) m, work rows
+};
+
+// Command every pad: its target is its centre plus step_distance * motion, clamped to the
+// workspace; a downward move stops at lowest_centres' z for that target, but never lifts the
+// pad above where it is; the pad's velocity is set to reach its target in step_time (the pad
+// is kinematic, and never turns). The arithmetic is numpy's on (B, 3) arrays, in its order.
+void command_pads(FootprintQuery query, const PadCommand& command);
 
 }  // namespace rg

@@ -10,6 +10,7 @@ from gymnasium.utils.env_checker import check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import rigid_gym
+from rigid_gym._core import gather_observations
 from rigid_gym.envs.task import CUBE_HALF, CUBE_MASS, STEP_TIME
 from rigid_gym.envs.effector import PAD_HALF_EXTENTS, Workspace
 from rigid_gym.envs.scripted import scripted_policy
@@ -389,3 +390,39 @@ def test_a_non_finite_state_is_reported_by_the_env_not_passed_on():
     env.world.state.velocity[0, env.cubes[0], 0] = np.nan  # what a solver failure would leave
     with pytest.raises(RuntimeError, match="non-finite state"):
         env.step(np.zeros(3))
+
+
+def test_observations_are_the_state_entries_their_index_names():
+    """``gather_observations`` (src/observation.h) against the same index applied by numpy to
+    the state laid side by side, over worlds of random state: entry j is state entry index[j]
+    minus entry minus[j] (a cube's offset from the pad) in the worlds asked for, and a state
+    entry out of range is refused by name before anything is read."""
+    envs = gym.make_vec("rigid_gym/Stack-v0", num_envs=5, vectorization_mode="vector_entry_point")
+    envs.reset(seed=0)
+    core = envs.unwrapped.core
+    s = core.world.state
+    rng = np.random.default_rng(0)
+    for array in (s.position, s.velocity, s.rotation, s.angular_velocity):
+        array[...] = rng.normal(size=array.shape)
+    worlds = np.array([3, 0, 3], dtype=np.int64)
+    out = np.empty((3, len(core.gather)))
+    assert gather_observations(s.position, s.velocity, s.rotation, s.angular_velocity, worlds,
+                               core.gather, core.minus, out)
+    side_by_side = np.concatenate([a.reshape(5, -1) for a in
+                                   (s.position, s.velocity, s.rotation, s.angular_velocity)],
+                                  axis=1)[worlds]
+    expected = side_by_side[:, core.gather] - np.where(core.minus >= 0,
+                                                       side_by_side[:, core.minus], 0.0)
+    assert out.tobytes() == expected.tobytes()
+    assert (core.minus >= 0).sum() == 3 * 2  # each cube's offset from the pad
+    s.velocity[1, 0, 1] = np.nan  # the table's, which no observation reads
+    assert gather_observations(s.position, s.velocity, s.rotation, s.angular_velocity, worlds,
+                               core.gather, core.minus, out)
+    s.velocity[3, core.gripper_body, 1] = np.nan  # the pad's, in a world observed
+    assert not gather_observations(s.position, s.velocity, s.rotation, s.angular_velocity,
+                                   worlds, core.gather, core.minus, out)
+    bad = core.gather.copy()
+    bad[-1] = 18 * s.position.shape[1]
+    with pytest.raises(ValueError, match="gather_observations: index holds"):
+        gather_observations(s.position, s.velocity, s.rotation, s.angular_velocity, worlds,
+                            bad, core.minus, out)

@@ -1,5 +1,5 @@
-// Python face of the gripper's footprint test (src/footprint.h): rigid_gym._core.lowest_centres,
-// used by envs/effector.py.
+// Python face of the gripper's command (src/footprint.h): rigid_gym._core.command_pads, used by
+// envs/effector.py.
 #include <string>
 
 #include "array_args.h"
@@ -9,39 +9,48 @@ namespace rg {
 
 void bind_footprint(nb::module_& m) {
     m.def(
-        "lowest_centres",
-        [](nb::handle targets, nb::handle positions, nb::handle rotations, int64_t pad,
-           nb::handle pad_half, nb::handle objects, nb::handle halves, nb::handle held,
-           nb::handle parts_x, nb::handle parts_r, nb::handle parts_half, nb::handle boxes_x,
-           nb::handle boxes_r, nb::handle out) {
-            const auto t = array_arg<const double>(targets, "lowest_centres: targets", {-1, 3});
-            const int64_t b = extent(t, 0);
-            const auto x = array_arg<const double>(positions, "lowest_centres: positions",
+        "command_pads",
+        [](nb::handle motions, nb::handle positions, nb::handle rotations, nb::handle velocities,
+           int64_t pad, nb::handle pad_half, nb::handle objects, nb::handle halves,
+           nb::handle held, nb::handle low, nb::handle high, double step_distance,
+           double step_time, nb::handle boxes_x, nb::handle boxes_r, nb::handle targets,
+           nb::handle lowest) {
+            const auto mo = array_arg<const double>(motions, "command_pads: motions", {-1, 3});
+            const int64_t b = extent(mo, 0);
+            const auto x = array_arg<const double>(positions, "command_pads: positions",
                                                    {b, -1, 3});
             const int64_t n = extent(x, 1);
-            const auto r = array_arg<const double>(rotations, "lowest_centres: rotations",
+            const auto r = array_arg<const double>(rotations, "command_pads: rotations",
                                                    {b, n, 3, 3});
+            const auto v = array_arg<double>(velocities, "command_pads: velocities", {b, n, 3});
             if (pad < 0 || pad >= n) {
-                throw nb::value_error(("lowest_centres: pad " + std::to_string(pad) +
+                throw nb::value_error(("command_pads: pad " + std::to_string(pad) +
                                        " is not a body, outside [0, " + std::to_string(n) + ")")
                                           .c_str());
             }
-            const auto ph = array_arg<const double>(pad_half, "lowest_centres: pad_half", {3});
-            const auto o = array_arg<const int64_t>(objects, "lowest_centres: objects", {-1});
+            if (!(step_time > 0.0)) {
+                throw nb::value_error(("command_pads: step_time must be > 0 s, got " +
+                                       std::to_string(step_time))
+                                          .c_str());
+            }
+            const auto ph = array_arg<const double>(pad_half, "command_pads: pad_half", {3});
+            const auto o = array_arg<const int64_t>(objects, "command_pads: objects", {-1});
             const int64_t k = extent(o, 0);
-            const auto hv = array_arg<const double>(halves, "lowest_centres: halves", {k, 3});
-            const auto hd = array_arg<const int64_t>(held, "lowest_centres: held", {b});
-            const auto px = array_arg<double>(parts_x, "lowest_centres: parts_x", {2, 3});
-            const auto pr = array_arg<double>(parts_r, "lowest_centres: parts_r", {2, 3, 3});
-            const auto ps = array_arg<double>(parts_half, "lowest_centres: parts_half", {2, 3});
-            const auto bx = array_arg<double>(boxes_x, "lowest_centres: boxes_x", {k, 3});
-            const auto br = array_arg<double>(boxes_r, "lowest_centres: boxes_r", {k, 3, 3});
-            const auto w = array_arg<double>(out, "lowest_centres: out", {b});
-            check_indices(rows<const int64_t>(o), 0, n, "lowest_centres: objects", "bodies");
-            check_indices(rows<const int64_t>(hd), -1, k, "lowest_centres: held",
+            const auto hv = array_arg<const double>(halves, "command_pads: halves", {k, 3});
+            const auto hd = array_arg<const int64_t>(held, "command_pads: held", {b});
+            const auto lo = array_arg<const double>(low, "command_pads: low", {3});
+            const auto hi = array_arg<const double>(high, "command_pads: high", {3});
+            const auto bx = array_arg<double>(boxes_x, "command_pads: boxes_x", {k, 3});
+            const auto br = array_arg<double>(boxes_r, "command_pads: boxes_r", {k, 3, 3});
+            const auto t = array_arg<double>(targets, "command_pads: targets", {b, 3});
+            const auto w = array_arg<double>(lowest, "command_pads: lowest", {b});
+            check_indices(rows<const int64_t>(o), 0, n, "command_pads: objects", "bodies");
+            check_indices(rows<const int64_t>(hd), -1, k, "command_pads: held",
                           "indices into objects, -1: none");
+            // the parts under test are the pad and the box it holds: two at most
+            Vec3 parts_x[2], parts_half[2];
+            Mat3 parts_r[2];
             FootprintQuery q;
-            q.targets = rows<const Vec3>(t);
             q.positions = rows<const Vec3>(x);
             q.rotations = rows<const Mat3>(r);
             q.num_bodies = n;
@@ -50,26 +59,38 @@ void bind_footprint(nb::module_& m) {
             q.objects = rows<const int64_t>(o);
             q.halves = rows<const Vec3>(hv);
             q.held = rows<const int64_t>(hd);
-            q.parts_x = rows<Vec3>(px);
-            q.parts_r = rows<Mat3>(pr);
-            q.parts_half = rows<Vec3>(ps);
+            q.parts_x = {parts_x, 2};
+            q.parts_r = {parts_r, 2};
+            q.parts_half = {parts_half, 2};
             q.boxes_x = rows<Vec3>(bx);
             q.boxes_r = rows<Mat3>(br);
+            PadCommand c;
+            c.motions = rows<const Vec3>(mo);
+            c.step_distance = step_distance;
+            c.low = rows<const Vec3>(lo)[0];
+            c.high = rows<const Vec3>(hi)[0];
+            c.step_time = step_time;
+            c.velocities = rows<Vec3>(v);
+            c.targets = rows<Vec3>(t);
+            c.lowest = rows<double>(w);
             nb::gil_scoped_release unlocked;
-            lowest_centres(q, rows<double>(w));
+            command_pads(q, c);
         },
-        nb::arg("targets"), nb::arg("positions"), nb::arg("rotations"), nb::arg("pad"),
-        nb::arg("pad_half"), nb::arg("objects"), nb::arg("halves"), nb::arg("held"),
-        nb::arg("parts_x"), nb::arg("parts_r"), nb::arg("parts_half"), nb::arg("boxes_x"),
-        nb::arg("boxes_r"), nb::arg("out"),
-        "The lowest z (m) the gripper's centre of every world may take at its target "
-        "(src/footprint.h): where the pad, or the box it holds, would rest on the table or on "
-        "the top of a box under its footprint. targets (B, 3) m, the pad's centre at its "
-        "target; positions (B, n, 3) m, rotations (B, n, 3, 3) of every body; pad: the pad's "
-        "body index, pad_half (3,) m; objects (K,) int64 the boxes' body indices and halves "
-        "(K, 3) m their half extents (the same in every world); held (B,) int64 the held box "
-        "(an index into objects, -1: none). Work arrays, overwritten: parts_x (2, 3), parts_r "
-        "(2, 3, 3), parts_half (2, 3), boxes_x (K, 3), boxes_r (K, 3, 3). out (B,) m, written.");
+        nb::arg("motions"), nb::arg("positions"), nb::arg("rotations"), nb::arg("velocities"),
+        nb::arg("pad"), nb::arg("pad_half"), nb::arg("objects"), nb::arg("halves"),
+        nb::arg("held"), nb::arg("low"), nb::arg("high"), nb::arg("step_distance"),
+        nb::arg("step_time"), nb::arg("boxes_x"), nb::arg("boxes_r"), nb::arg("targets"),
+        nb::arg("lowest"),
+        "One env step's command of the gripper of every world (src/footprint.h): the pad's "
+        "target is its centre plus step_distance (m) x motion, clamped to [low, high] (3,) m; "
+        "a downward move stops where the pad, or the box it holds, would rest on the table or "
+        "on the top of a box under its footprint (never lifting the pad); the pad's velocity is "
+        "set to reach the target in step_time (s). motions (B, 3) in [-1, 1]; positions "
+        "(B, n, 3) m, rotations (B, n, 3, 3) and velocities (B, n, 3) m/s (written: the pads') "
+        "of every body; pad: the pad's body index, pad_half (3,) m; objects (K,) int64 the "
+        "boxes' body indices and halves (K, 3) m their half extents (the same in every world); "
+        "held (B,) int64 the held box (an index into objects, -1: none). Work arrays, "
+        "overwritten: boxes_x (K, 3), boxes_r (K, 3, 3), targets (B, 3), lowest (B,).");
 }
 
 }  // namespace rg

@@ -8,6 +8,7 @@ void bind_world(nb::module_& m);
 void bind_mesh(nb::module_& m);
 void bind_render(nb::module_& m);
 void bind_footprint(nb::module_& m);
+void bind_observation(nb::module_& m);
 void bind_geometry(nb::module_& m);
 }  // namespace rg
 
@@ -17,5 +18,6 @@ NB_MODULE(_core, m) {
     rg::bind_mesh(m);
     rg::bind_render(m);
     rg::bind_footprint(m);
+    rg::bind_observation(m);
     rg::bind_geometry(m);
 }
