@@ -134,7 +134,7 @@ void update_velocities(const BodyStates& bodies, const BodyModel& model, double 
 }
 
 void update_positions(const BodyStates& bodies, const BodyModel& model, double dt, int order,
-                      bool keep_energy, Span<const int64_t> listed, Span<const uint8_t> asleep) {
+                      bool keep_energy, Span<const int64_t> acting, Span<const uint8_t> asleep) {
     for (int64_t i = 0; i < bodies.position.size; ++i) {
         if (model.motion[i] == STATIC || (asleep.size > 0 && asleep[i])) {
             continue;
@@ -161,7 +161,7 @@ void update_positions(const BodyStates& bodies, const BodyModel& model, double d
             q = rotate_by_angular_velocity(q, bar, h);
             r = rotation_from_quaternion(q);
         }
-        if (keep_energy && speed > 0.0 && listed[i] == 0) {
+        if (keep_energy && speed > 0.0 && acting[i] == 0) {
             q = restore_energy(q, r, l, inverse_moments, energy);
             r = rotation_from_quaternion(q);
         }

@@ -37,18 +37,19 @@ void update_velocities(const BodyStates& bodies, const BodyModel& model, double 
 // X += dt V; advance q by the rotation of the step; refresh R and omega. Dynamic bodies rotate
 // in sub-steps of at most a quarter turn, each re-evaluating omega from L at the current
 // orientation; kinematic bodies turn at their set angular velocity (exact). With keep_energy
-// a free dynamic body (listed in no pair: listed[i] == 0) is then turned, by the smallest
-// body-frame rotation that does it, back onto the rotational energy it had (L is kept
-// exactly: it is the stored state), so it keeps both |L| and E to round-off whatever dt
-// (SolverConfig.keep_energy). A body in a pair is left to its contacts: turning it after the
-// impulse stages would move its contact points off the poses the impulses were computed for
-// (a tumbling cube's corner dug 28 mm into the ground), and its energy is the impulses' to
-// change anyway.
+// a free dynamic body (in no pair that took an impulse this step: acting[i] == 0, so a pair
+// listed because two fast bodies' grown boxes met, but which never touched, leaves it free)
+// is then turned, by the smallest body-frame rotation that does it, back onto the rotational
+// energy it had (L is kept exactly: it is the stored state), so it keeps both |L| and E to
+// round-off whatever dt (SolverConfig.keep_energy). A body that took an impulse is left to
+// its contacts: turning it after the impulse stages would move its contact points off the
+// poses the impulses were computed for (a tumbling cube's corner dug 28 mm into the ground),
+// and its energy is the impulses' to change anyway.
 // Bodies with asleep[i] set (sleep.h; asleep empty without sleeping) are left as they are:
 // their velocities are the last step's final ones, which moved them nowhere (the step is a
 // fixed point for them), so updating them would give the same bits.
 void update_positions(const BodyStates& bodies, const BodyModel& model, double dt, int order,
-                      bool keep_energy, Span<const int64_t> listed, Span<const uint8_t> asleep);
+                      bool keep_energy, Span<const int64_t> acting, Span<const uint8_t> asleep);
 
 // Put every attached body at its offset from its parent, moving with the parent's velocity
 // and not turning.

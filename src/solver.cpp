@@ -130,15 +130,27 @@ bool alone(const WorldStep& w, int a, int b) {
 
 }  // namespace
 
-void count_pairs_of_bodies(WorldStep& w, int64_t pairs) {
+namespace {
+
+void count_pairs(WorldStep& w, int64_t pairs, bool acting_only) {
     for (int i = 0; i < w.num_bodies(); ++i) {
         w.pairs_of[i] = 0;
     }
     for (int64_t k = 0; k < pairs; ++k) {
+        const Vec3 j = w.pair_impulse[k];
+        if (acting_only && j.x == 0.0 && j.y == 0.0 && j.z == 0.0) {
+            continue;
+        }
         w.pairs_of[w.lists.pair_a[k]] += 1;
         w.pairs_of[w.lists.pair_b[k]] += 1;
     }
 }
+
+}  // namespace
+
+void count_pairs_of_bodies(WorldStep& w, int64_t pairs) { count_pairs(w, pairs, false); }
+
+void count_acting_pairs_of_bodies(WorldStep& w, int64_t pairs) { count_pairs(w, pairs, true); }
 
 Vec3 collision_lookahead(const BodyModel& model, double dt) {
     const Vec3 g = model.gravity;

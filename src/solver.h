@@ -47,6 +47,11 @@ void propagate_world_shock(WorldStep& w, int64_t pairs, double dt);
 // w.pairs_of: in how many of the first `pairs` listed pairs each body is.
 void count_pairs_of_bodies(WorldStep& w, int64_t pairs);
 
+// w.pairs_of: in how many of the first `pairs` listed pairs each body took an impulse this
+// step (w.pair_impulse not zero): the pairs that acted on its motion. A pair listed because
+// two fast bodies' grown boxes meet, whose bodies never touch, does not count.
+void count_acting_pairs_of_bodies(WorldStep& w, int64_t pairs);
+
 // What the collision stage moves dynamic bodies by when predicting their poses: dt^2 g (m).
 Vec3 collision_lookahead(const BodyModel& model, double dt);
 

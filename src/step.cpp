@@ -165,7 +165,7 @@ int64_t step_world(WorldStep& w, int64_t steps, int phases, double dt) {
             if (c.overlap_correction > 0.0 && *w.contacts.detected) {
                 correct_overlap(w, *w.rest.awake_pairs, dt, c.overlap_correction);
             }
-            count_pairs_of_bodies(w, *w.pair_count);
+            count_acting_pairs_of_bodies(w, *w.pair_count);
             update_positions(w.bodies, w.model, dt, c.rotation_order, c.keep_energy,
                              {w.pairs_of.data, w.pairs_of.size},
                              c.sleep ? Span<const uint8_t>{w.rest.asleep.data, w.rest.asleep.size}
