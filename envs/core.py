@@ -200,7 +200,7 @@ class TaskBatch:
         if self.task.has_grip:
             vectors[:, 6] = self.gripper.held[copies] >= 0
         if not finite:  # a solver failure: say so here, not in a network
-            self.refuse_non_finite(vectors, copies)
+            self.refuse_non_finite(vectors, worlds)
         achieved = vectors[:, self.achieved_columns].astype(np.float32)
         noise = self.options.observation_noise
         if noise > 0.0:
@@ -220,12 +220,12 @@ class TaskBatch:
             else np.zeros(len(worlds), dtype=bool)
         return Outcome(observations, rewards, successes, terminated)
 
-    def refuse_non_finite(self, vectors: np.ndarray, copies) -> None:
+    def refuse_non_finite(self, vectors: np.ndarray, worlds: np.ndarray) -> None:
         """Raise the RuntimeError that names the first copy with a non-finite entry in its
-        observation ``vectors`` (k, size), which has one."""
+        observation ``vectors`` (k, size) of copies ``worlds`` (k,), which has one."""
         finite = np.isfinite(vectors).all(axis=1)
         row = int(np.flatnonzero(~finite)[0])
-        copy = int(np.arange(self.num_worlds)[copies][row])
+        copy = int(worlds[row])
         bad = np.flatnonzero(~np.isfinite(vectors[row])).tolist()
         which = f" (copy {copy})" if self.num_worlds > 1 else ""
         raise RuntimeError(f"{self.name}{which}: the simulation produced non-finite state "

@@ -94,9 +94,9 @@ class SuctionGripper:
         s = self.world.state
         # the velocity written into the state as World.set_velocity would (it never turns:
         # omega stays 0), without its checks: the target is finite by construction
-        command_pads(np.ascontiguousarray(motions), s.position, s.rotation, s.velocity, self.body, self.pad_half,
-                     self.objects, self.half_extents, self.held, self.low, self.high,
-                     STEP_DISTANCE, self.step_time, *self.work)
+        command_pads(np.ascontiguousarray(motions), s.position, s.rotation, s.velocity,
+                     self.body, self.pad_half, self.objects, self.half_extents, self.held,
+                     self.low, self.high, STEP_DISTANCE, self.step_time, *self.work)
         if grips is not None:
             self.grip(grips)
 

@@ -128,10 +128,7 @@ bool alone(const WorldStep& w, int a, int b) {
            (w.model.motion[b] != DYNAMIC || w.pairs_of[b] == 1);
 }
 
-}  // namespace
-
-namespace {
-
+// w.pairs_of over the first `pairs` listed pairs; acting_only: those with an impulse.
 void count_pairs(WorldStep& w, int64_t pairs, bool acting_only) {
     for (int i = 0; i < w.num_bodies(); ++i) {
         w.pairs_of[i] = 0;
