@@ -149,4 +149,29 @@ void pairs_by_body(const Graph& graph, const PairLists& lists, int64_t pairs, in
     }
 }
 
+void pairs_by_level(const Graph& graph, const PairLists& lists, int64_t pairs, int num_bodies) {
+    const Span<int64_t> start = graph.level_pair_start, fill = graph.counts;
+    const auto inside = [&](int64_t k) {
+        const int64_t la = graph.level[lists.pair_a[k]];
+        return graph.touching[k] && la > 0 && la == graph.level[lists.pair_b[k]];
+    };
+    for (int64_t l = 0; l < num_bodies + 2; ++l) {
+        start[l] = 0;
+    }
+    for (int64_t k = 0; k < pairs; ++k) {
+        if (inside(k)) {
+            start[graph.level[lists.pair_a[k]] + 1] += 1;
+        }
+    }
+    for (int64_t l = 0; l < num_bodies + 1; ++l) {
+        start[l + 1] += start[l];
+        fill[l] = start[l];
+    }
+    for (int64_t k = 0; k < pairs; ++k) {
+        if (inside(k)) {
+            graph.level_pairs[fill[graph.level[lists.pair_a[k]]]++] = k;
+        }
+    }
+}
+
 }  // namespace rg

@@ -18,6 +18,12 @@ void contact_levels(const Graph& graph, Span<const int32_t> motion, int64_t num_
 // graph.body_pairs[body_pair_start[v] : body_pair_start[v + 1]], in pair order.
 void pairs_by_body(const Graph& graph, const PairLists& lists, int64_t pairs, int num_bodies);
 
+// CSR lists of the touching pairs whose two bodies share a level (above 0): level l's are
+// graph.level_pairs[level_pair_start[l] : level_pair_start[l + 1]], in pair order. Shock
+// propagation resolves them level by level; one pass over the pairs finds them all, where
+// scanning every pair for every level costs pairs x levels.
+void pairs_by_level(const Graph& graph, const PairLists& lists, int64_t pairs, int num_bodies);
+
 // out[:n] = the indices 0..n-1 ordered by keys[:n] (ints in [0, num_keys)), ties by index
 // (a stable sort); counts: (>= num_keys + 1,) scratch.
 void counting_sort(Span<const int64_t> keys, int64_t n, int64_t num_keys, Span<int64_t> counts,

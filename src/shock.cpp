@@ -102,6 +102,7 @@ void propagate_world_shock(WorldStep& w, int64_t pairs, double dt) {
     const int64_t edges = build_contact_graph(w, pairs, dt);
     contact_levels(graph, w.model.motion, edges);
     pairs_by_body(graph, w.lists, pairs, n);
+    pairs_by_level(graph, w.lists, pairs, n);
     counting_sort({graph.level.data, graph.level.size}, n, n + 1, graph.counts, graph.by_level);
     int64_t start = 0;
     while (start < n) {
@@ -116,11 +117,11 @@ void propagate_world_shock(WorldStep& w, int64_t pairs, double dt) {
                 int applied = resolve_level_supports(w, start, end, current, dt);
                 // then the pairs inside the level, both bodies movable
                 int inside = 0;
-                for (int64_t k = 0; k < pairs; ++k) {
+                for (int64_t s = graph.level_pair_start[current];
+                     s < graph.level_pair_start[current + 1]; ++s) {
+                    const int64_t k = graph.level_pairs[s];
                     const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
-                    if (graph.touching[k] && graph.level[a] == current && graph.level[b] == current) {
-                        inside += resolve_pair(w, k, a, b, dt, NO_LOOKAHEAD, SHOCK, 0.0, {true, true});
-                    }
+                    inside += resolve_pair(w, k, a, b, dt, NO_LOOKAHEAD, SHOCK, 0.0, {true, true});
                 }
                 // and the supports again: the last impulse of a sweep must not leave a body of
                 // the level moving into a frozen one (a box pressed sideways by its neighbour

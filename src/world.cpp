@@ -101,6 +101,8 @@ void GraphBuffers::allocate(int num_worlds, int64_t num_bodies, int64_t num_pair
     edge_start.assign(b * (num_bodies + 1), 0);
     body_pair_start.assign(b * (num_bodies + 1), 0);
     counts.assign(b * (num_bodies + 2), 0);
+    level_pair_start.assign(b * (num_bodies + 2), 0);
+    level_pairs.assign(b * num_pairs, 0);
 }
 
 Graph GraphBuffers::rows(int w) {
@@ -114,7 +116,8 @@ Graph GraphBuffers::rows(int w) {
             world_rows(calls, w, n),             world_rows(next_edge, w, n),
             world_rows(level, w, n),             world_rows(by_level, w, n),
             world_rows(counts, w, n + 2),        world_rows(body_pair_start, w, n + 1),
-            world_rows(body_pairs, w, e)};
+            world_rows(body_pairs, w, e),        world_rows(level_pair_start, w, n + 2),
+            world_rows(level_pairs, w, pairs)};
 }
 
 StepContext::StepContext(int num_worlds, Geometry geometry, std::vector<int32_t> body_motion,

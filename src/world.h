@@ -56,6 +56,8 @@ struct Graph {
     Span<int64_t> counts;           // (n + 2,) counting sorts
     Span<int64_t> body_pair_start;  // (n + 1,) each body's touching pairs, CSR
     Span<int64_t> body_pairs;       // (2P,)
+    Span<int64_t> level_pair_start; // (n + 2,) the touching pairs inside each level, CSR
+    Span<int64_t> level_pairs;      // (P,)
 };
 
 // Sleeping's bookkeeping (sleep.h), kept from step to step.
@@ -153,7 +155,7 @@ struct GraphBuffers {
     Array<uint8_t> touching, on_stack;
     Array<int64_t> edge_from, edge_to, edge_start, targets, component, component_level,
         by_component, index, low, stack, calls, next_edge, level, by_level, counts,
-        body_pair_start, body_pairs;
+        body_pair_start, body_pairs, level_pair_start, level_pairs;
     int64_t bodies = 0, pairs = 0;
 
     void allocate(int num_worlds, int64_t num_bodies, int64_t num_pairs);
