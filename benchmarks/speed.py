@@ -4,12 +4,15 @@
    ``rigid_gym.report.scenes``: the 10-cube stack, the 55-box pyramid and piles of 10, 100 and
    1000 mixed bodies. Every engine (ours, and MuJoCo and PyBullet through
    ``rigid_gym.report.peers`` when the ``compare`` extra is installed: ``pip install -e
-   ".[compare]"``) builds the scene, runs ``settle`` steps, then times its own ``step(steps)``
-   ``--repeats`` times; the figure is the median. Every engine gets the same step counts, so
-   all are timed over the same stretch of simulated time. Then the stack runs 10 s more and
-   the table gives how far its top cube moved (bar: < 1 mm for ours); for the piles, the
-   microseconds per step and per body-step and the exponent k of cost ~ N^k between the two
-   largest piles (100 and 1000). A peer that cannot build a scene says why in the table.
+   ".[compare]"``) builds every scene and runs ``settle`` steps; then each of ``--repeats``
+   rounds times ``step(steps)`` of every scene and engine in turn. A rate is the median over
+   the rounds, a ratio the median of the rounds' ratios, k the median of the rounds' k: what
+   is compared was timed within one round, so the VM's drift in speed moves both sides.
+   Every engine gets the same step counts, so all are timed over the same stretch of
+   simulated time. Then the stack runs 10 s more and the table gives how far its top cube
+   moved (bar: < 1 mm for ours); for the piles, the microseconds per step and per body-step
+   and the exponent k of cost ~ N^k between the two largest piles (100 and 1000). A peer that
+   cannot build a scene says why in the table.
 2. Envs (``--only envs``): env steps/s through ``gym.make`` for Push, Stack and Throw, one
    env, seeded random actions, resets included (the helper of ``benchmarks/envs.py``), and
    panda-gym's PandaPush-v3 timed the same way in the same run when installed, with our rate
@@ -135,16 +138,6 @@ def build(engine: str, scene: rg.Scene):
         return f"cannot build: {exc}".replace("|", "/")
 
 
-def median_rate(world, steps: int, repeats: int) -> float:
-    """Median steps/s of ``repeats`` timings of ``world.step(steps)``."""
-    rates = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        world.step(steps)
-        rates.append(steps / (time.perf_counter() - start))
-    return statistics.median(rates)
-
-
 def moved_mm(world, body: int, seconds: float) -> float:
     """How far the centre of ``body`` moves while ``world`` runs ``seconds`` s, mm."""
     start = np.array(world.position[body])
@@ -152,52 +145,74 @@ def moved_mm(world, body: int, seconds: float) -> float:
     return 1e3 * float(np.linalg.norm(world.position[body] - start))
 
 
-def measure(engine: str, scene: rg.Scene, settle: int, steps: int, repeats: int,
-            watch: int | None = None):
-    """(steps/s, mm moved by body ``watch`` over STACK_SECONDS after the timings, or None),
-    or why the engine cannot run the scene (str)."""
-    world = build(engine, scene)
-    if isinstance(world, str):
-        return world
-    world.step(settle)
-    rate = median_rate(world, steps, repeats)
-    moved = None if watch is None else moved_mm(world, watch, STACK_SECONDS)
-    if engine != "ours":
-        world.close()
-    return rate, moved
-
-
 def rate_text(rate: float) -> str:
     """Steps/s to the unit from 100 up, to 3 significant digits below."""
     return f"{rate:,.0f}" if rate >= 100 else f"{rate:.3g}"
 
 
-def rate_cells(ours, peer) -> str:
-    """The peer's steps/s and ours / theirs, or why the peer has no rate."""
+def timed_rates(scenes, repeats: int) -> dict:
+    """{(scene name, engine): [steps/s of each repeat]} or why the engine has no world (str).
+    Every world is built and settled first; then each repeat times every world once in turn,
+    so repeat r of every scene and engine falls in the same stretch of the run. Ratios and
+    growth exponents are taken repeat by repeat, between timings made minutes apart at most
+    (a VM whose speed drifts while one engine's timings run would otherwise move the ratio)."""
+    worlds = {}
+    for name, scene, settle, _ in scenes:
+        for engine in ENGINES:
+            world = build(engine, scene)
+            if not isinstance(world, str):
+                world.step(settle)
+            worlds[name, engine] = world
+    rates = {key: world if isinstance(world, str) else [] for key, world in worlds.items()}
+    for _ in range(repeats):
+        for name, _, _, steps in scenes:
+            for engine in ENGINES:
+                world = worlds[name, engine]
+                if isinstance(world, str):
+                    continue
+                start = time.perf_counter()
+                world.step(steps)
+                rates[name, engine].append(steps / (time.perf_counter() - start))
+    for name, scene, _, _ in scenes:
+        for engine in ENGINES:
+            world = worlds[name, engine]
+            if isinstance(world, str):
+                continue
+            if name.endswith("stack"):  # the top cube, after the timings
+                rates[name, engine, "moved"] = moved_mm(world, len(scene.bodies) - 1, STACK_SECONDS)
+            if engine != "ours":
+                world.close()
+    return rates
+
+
+def rate_cells(ours: list, peer) -> str:
+    """The peer's median steps/s and the median over repeats of ours / theirs, or why the peer
+    has no rate."""
     if isinstance(peer, str):
         return f"{peer} | —"
-    return f"{rate_text(peer[0])} | {ours[0] / peer[0]:.2f}x"
+    ratio = statistics.median(o / p for o, p in zip(ours, peer))
+    return f"{rate_text(statistics.median(peer))} | {ratio:.2f}x"
 
 
-def print_solver_table(results: dict, scenes) -> None:
+def print_solver_table(rates: dict, scenes) -> None:
     print("| scene | bodies | ours | " + " | ".join(f"{p} | ours/{p}" for p in PEERS) + " |")
     print("|---|---|---|" + "---|---|" * len(PEERS))
     for name, scene, _, _ in scenes:
-        row = results[name]
-        print(f"| {name} | {dynamic_bodies(scene)} | {rate_text(row['ours'][0])} | "
-              + " | ".join(rate_cells(row["ours"], row[p]) for p in PEERS) + " |")
+        ours = rates[name, "ours"]
+        print(f"| {name} | {dynamic_bodies(scene)} | {rate_text(statistics.median(ours))} | "
+              + " | ".join(rate_cells(ours, rates[name, p]) for p in PEERS) + " |")
 
 
-def print_stack_health(row: dict) -> None:
-    print(f"\n10-cube stack: top cube moved in {STACK_SECONDS:.0f} s from the settled state "
+def print_stack_health(rates: dict, name: str) -> None:
+    print(f"\n{name}: top cube moved in {STACK_SECONDS:.0f} s from the settled state "
           f"(bar: < {STACK_BAR_MM:g} mm for ours)\n")
     print("| engine | moved (mm) |")
     print("|---|---|")
     for engine in ENGINES:
-        cell = row[engine] if isinstance(row[engine], str) else f"{row[engine][1]:.3g}"
-        print(f"| {engine} | {cell} |")
-    verdict = "met" if row["ours"][1] < STACK_BAR_MM else "NOT met"
-    print(f"\nbar {verdict}: ours moved {row['ours'][1]:.3g} mm")
+        moved = rates.get((name, engine, "moved"))
+        print(f"| {engine} | {rates[name, engine] if moved is None else f'{moved:.3g}'} |")
+    moved = rates[name, "ours", "moved"]
+    print(f"\nbar {'met' if moved < STACK_BAR_MM else 'NOT met'}: ours moved {moved:.3g} mm")
 
 
 def growth_exponent(counts, microseconds) -> float:
@@ -205,38 +220,37 @@ def growth_exponent(counts, microseconds) -> float:
     return float(np.log(microseconds[-1] / microseconds[-2]) / np.log(counts[-1] / counts[-2]))
 
 
-def print_pile_growth(results: dict, scenes) -> None:
+def print_pile_growth(rates: dict, scenes) -> None:
     piles = [(name, dynamic_bodies(scene)) for name, scene, _, _ in scenes
              if name.startswith("pile")]
     counts = np.array([n for _, n in piles], dtype=float)
-    print(f"\nPiles: cost per step and per body-step (us), and k of cost ~ N^k between "
-          f"N = {counts[-2]:.0f} and {counts[-1]:.0f}\n")
+    print(f"\nPiles: cost per step and per body-step (us, medians), and k of cost ~ N^k between "
+          f"N = {counts[-2]:.0f} and {counts[-1]:.0f} (the median of each repeat's k)\n")
     print("| engine | " + " | ".join(f"us/step N={n:.0f}" for n in counts) + " | "
           + " | ".join(f"us/body-step N={n:.0f}" for n in counts) + " | k |")
     print("|---|" + "---|" * (2 * len(counts) + 1))
     for engine in ENGINES:
-        runs = [results[name][engine] for name, _ in piles]
+        runs = [rates[name, engine] for name, _ in piles]
         if any(isinstance(run, str) for run in runs):
             print(f"| {engine} | " + " | ".join(["—"] * (2 * len(counts))) + " | — |")
             continue
-        per_step = np.array([1e6 / rate for rate, _ in runs])
+        per_repeat = 1e6 / np.array(runs)  # (piles, repeats) us per step
+        per_step = np.median(per_repeat, axis=1)
+        k = statistics.median(growth_exponent(counts, per_repeat[:, r])
+                              for r in range(per_repeat.shape[1]))
         print(f"| {engine} | " + " | ".join(f"{t:,.1f}" for t in per_step) + " | "
-              + " | ".join(f"{t:.2f}" for t in per_step / counts)
-              + f" | {growth_exponent(counts, per_step):.2f} |")
+              + " | ".join(f"{t:.2f}" for t in per_step / counts) + f" | {k:.2f} |")
 
 
 def solver_section(quick: bool, repeats: int) -> None:
     scenes = solver_scenes(quick)
     print(f"\nSolver steps/s, dt = 1/240, one world (median of {repeats} timings after "
-          "settling; ratios are ours / theirs)\n")
-    results = {}
-    for name, scene, settle, steps in scenes:
-        watch = len(scene.bodies) - 1 if name.endswith("stack") else None  # the top cube
-        results[name] = {engine: measure(engine, scene, settle, steps, repeats, watch)
-                         for engine in ENGINES}
-    print_solver_table(results, scenes)
-    print_stack_health(results["10-cube stack"])
-    print_pile_growth(results, scenes)
+          "settling, every engine and scene timed in turn in each repeat; ratios are the "
+          "median over repeats of ours / theirs)\n")
+    rates = timed_rates(scenes, repeats)
+    print_solver_table(rates, scenes)
+    print_stack_health(rates, "10-cube stack")
+    print_pile_growth(rates, scenes)
 
 
 # -- envs ------------------------------------------------------------------------------------
