@@ -48,28 +48,44 @@ def scripted_success(env_id: str, episodes: int) -> tuple[float, float, float]:
     return float(np.mean(successes)), float(np.mean(returns)), seconds
 
 
-def steps_per_second(env_id: str, steps: int, repeats: int) -> float:
-    """Median env steps/s over ``repeats`` runs of ``steps`` random steps (resets included)."""
+def random_stepper(env_id: str):
+    """A function (count) -> seconds that steps a ``gym.make`` env ``count`` times with seeded
+    uniform random actions, resetting where an episode ends; warmed up by 100 steps."""
     env = gym.make(env_id)
     rng = np.random.default_rng(0)
     env.reset(seed=0)
     env.action_space.seed(0)
 
-    def run(count):
+    def run(count) -> float:
+        start = time.perf_counter()
         for _ in range(count):
             action = rng.uniform(-1, 1, env.action_space.shape).astype(np.float32)
             _, _, terminated, truncated, _ = env.step(action)
             if terminated or truncated:
                 env.reset()
+        return time.perf_counter() - start
 
     run(100)  # warm-up: first allocations and caches
-    rates = []
+    return run
+
+
+def step_rates(env_ids: list[str], steps: int, repeats: int) -> dict[str, list[float]]:
+    """{env id: env steps/s of each round}: in each of ``repeats`` rounds every env runs
+    ``steps`` random steps (resets included) in turn, so rates compared between envs were
+    timed in the same stretch of the run, whatever the machine's drift in speed."""
+    runs = {env_id: random_stepper(env_id) for env_id in env_ids}
+    rates = {env_id: [] for env_id in env_ids}
     for _ in range(repeats):
-        start = time.perf_counter()
-        run(steps)
-        rates.append(steps / (time.perf_counter() - start))
-    env.close()
-    return statistics.median(rates)
+        for env_id, run in runs.items():
+            rates[env_id].append(steps / run(steps))
+    return rates
+
+
+def rate_and_ratio(rates: list[float], panda: list[float] | None) -> tuple[float, str]:
+    """The median rate, and the median over rounds of rate / PandaPush's (or why none)."""
+    if panda is None:
+        return statistics.median(rates), "panda-gym not installed"
+    return statistics.median(rates), f"{statistics.median(r / p for r, p in zip(rates, panda)):.2f}x"
 
 
 def frame_milliseconds(env_id: str, frames: int = 20) -> float:
@@ -117,6 +133,22 @@ def panda_available() -> bool:
     return True
 
 
+def print_speed_table(steps: int, repeats: int) -> None:
+    """Env steps/s of every task and of PandaPush-v3 (when installed), timed in turn in each
+    of ``repeats`` rounds of ``steps`` steps; ratios are the medians of the rounds'."""
+    print(f"\nEnv steps/s, gym.make, one env, random actions, resets included (median of "
+          f"{repeats} rounds of {steps} steps, every env timed in turn in each round)\n")
+    rates = step_rates(TASKS + ([PANDA_PUSH] if panda_available() else []), steps, repeats)
+    panda = rates.get(PANDA_PUSH)
+    print(f"| env | steps/s | ours/{PANDA_PUSH} |")
+    print("|---|---|---|")
+    for env_id in TASKS:
+        rate, ratio = rate_and_ratio(rates[env_id], panda)
+        print(f"| {env_id} | {rate:,.0f} | {ratio} |")
+    if panda:
+        print(f"| {PANDA_PUSH} (panda-gym, PyBullet) | {statistics.median(panda):,.0f} | 1.00x |")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=100)
@@ -136,18 +168,7 @@ def main():
             print(f"| {env_id} | {rate:.0%} | {mean_return:.1f} | {seconds:.3f} |", flush=True)
 
     if args.only in (None, "speed"):
-        print(f"\nEnv steps per second, gym.make, one process, random actions "
-              f"(median of {args.repeats} x {args.steps} steps)\n")
-        panda = steps_per_second(PANDA_PUSH, args.steps, args.repeats) if panda_available() \
-            else None
-        print(f"| env | steps/s | vs {PANDA_PUSH} |")
-        print("|---|---|---|")
-        for env_id in TASKS:
-            rate = steps_per_second(env_id, args.steps, args.repeats)
-            ratio = f"{rate / panda:.2f}x" if panda else "not installed"
-            print(f"| {env_id} | {rate:,.0f} | {ratio} |", flush=True)
-        if panda:
-            print(f"| {PANDA_PUSH} (panda-gym, PyBullet) | {panda:,.0f} | 1.00x |")
+        print_speed_table(args.steps, args.repeats)
 
     if args.only in (None, "render"):
         print("\nrgb_array frames, 480 x 480 (median of 20 after the first)\n")

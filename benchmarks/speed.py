@@ -256,20 +256,7 @@ def solver_section(quick: bool, repeats: int) -> None:
 # -- envs ------------------------------------------------------------------------------------
 
 def envs_section(quick: bool, repeats: int) -> None:
-    steps = 200 if quick else 1000
-    panda_id = ENV_BENCHMARK.PANDA_PUSH
-    print(f"\nEnv steps/s, gym.make, one env, random actions, resets included (median of "
-          f"{repeats} x {steps} steps)\n")
-    panda = ENV_BENCHMARK.steps_per_second(panda_id, steps, repeats) \
-        if ENV_BENCHMARK.panda_available() else None
-    print(f"| env | steps/s | ours/{panda_id} |")
-    print("|---|---|---|")
-    for env_id in ENV_BENCHMARK.TASKS:
-        rate = ENV_BENCHMARK.steps_per_second(env_id, steps, repeats)
-        ratio = f"{rate / panda:.2f}x" if panda else "panda-gym not installed"
-        print(f"| {env_id} | {rate:,.0f} | {ratio} |", flush=True)
-    if panda:
-        print(f"| {panda_id} (panda-gym, PyBullet) | {panda:,.0f} | 1.00x |")
+    ENV_BENCHMARK.print_speed_table(200 if quick else 1000, repeats)
 
 
 # -- batched envs ----------------------------------------------------------------------------
