@@ -135,7 +135,8 @@ void sort_pairs(const PairLists& lists, int64_t count, int64_t num_bodies) {
     for (int64_t k = 0; k < count; ++k) {
         lists.keys[k] = static_cast<int64_t>(lists.pair_a[k]) * num_bodies + lists.pair_b[k];
     }
-    const uint64_t largest = static_cast<uint64_t>(num_bodies) * static_cast<uint64_t>(num_bodies);
+    const uint64_t bodies = static_cast<uint64_t>(num_bodies);
+    const uint64_t largest = bodies * bodies - 1;  // the largest key a pair can have
     Span<int64_t> src = lists.keys, dst = lists.spare;
     for (int shift = 0; shift < 64 && (largest >> shift) != 0; shift += 8) {
         int64_t start[257] = {};  // start[d + 1]: how many keys have digit d, then prefix sums
