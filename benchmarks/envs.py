@@ -15,6 +15,7 @@
 """
 
 import argparse
+import functools
 import statistics
 import time
 from pathlib import Path
@@ -48,8 +49,8 @@ def scripted_success(env_id: str, episodes: int) -> tuple[float, float, float]:
     return float(np.mean(successes)), float(np.mean(returns)), seconds
 
 
-def random_stepper(env_id: str):
-    """A function (count) -> seconds that steps a ``gym.make`` env ``count`` times with seeded
+def random_stepper(env_id: str, steps: int):
+    """A function () -> env steps/s of ``steps`` steps of a ``gym.make`` env with seeded
     uniform random actions, resetting where an episode ends; warmed up by 100 steps."""
     env = gym.make(env_id)
     rng = np.random.default_rng(0)
@@ -63,22 +64,28 @@ def random_stepper(env_id: str):
             _, _, terminated, truncated, _ = env.step(action)
             if terminated or truncated:
                 env.reset()
-        return time.perf_counter() - start
+        return count / (time.perf_counter() - start)
 
     run(100)  # warm-up: first allocations and caches
-    return run
+    return functools.partial(run, steps)
+
+
+def rates_in_rounds(runs: dict, repeats: int) -> dict:
+    """{key: [rate of each round]} for ``runs`` {key: () -> rate}: in each of ``repeats``
+    rounds every run is timed once, in turn, so rates compared between keys were timed in the
+    same stretch of the run, whatever the machine's drift in speed."""
+    rates = {key: [] for key in runs}
+    for _ in range(repeats):
+        for key, run in runs.items():
+            rates[key].append(run())
+    return rates
 
 
 def step_rates(env_ids: list[str], steps: int, repeats: int) -> dict[str, list[float]]:
-    """{env id: env steps/s of each round}: in each of ``repeats`` rounds every env runs
-    ``steps`` random steps (resets included) in turn, so rates compared between envs were
-    timed in the same stretch of the run, whatever the machine's drift in speed."""
-    runs = {env_id: random_stepper(env_id) for env_id in env_ids}
-    rates = {env_id: [] for env_id in env_ids}
-    for _ in range(repeats):
-        for env_id, run in runs.items():
-            rates[env_id].append(steps / run(steps))
-    return rates
+    """{env id: env steps/s of each round} of ``steps`` random steps (resets included) of
+    every env in turn in each of ``repeats`` rounds (rates_in_rounds)."""
+    return rates_in_rounds({env_id: random_stepper(env_id, steps) for env_id in env_ids},
+                           repeats)
 
 
 def rate_and_ratio(rates: list[float], panda: list[float] | None) -> tuple[float, str]:

@@ -37,6 +37,7 @@ at most ``RIGID_GYM_NUM_THREADS``).
 """
 
 import argparse
+import functools
 import importlib.metadata
 import importlib.util
 import os
@@ -150,39 +151,40 @@ def rate_text(rate: float) -> str:
     return f"{rate:,.0f}" if rate >= 100 else f"{rate:.3g}"
 
 
-def timed_rates(scenes, repeats: int) -> dict:
-    """{(scene name, engine): [steps/s of each repeat]} or why the engine has no world (str).
-    Every world is built and settled first; then each repeat times every world once in turn,
-    so repeat r of every scene and engine falls in the same stretch of the run. Ratios and
-    growth exponents are taken repeat by repeat, between timings made minutes apart at most
-    (a VM whose speed drifts while one engine's timings run would otherwise move the ratio)."""
-    worlds = {}
-    for name, scene, settle, _ in scenes:
+def stepping_rate(world, steps: int) -> float:
+    """Steps/s of one ``world.step(steps)``."""
+    start = time.perf_counter()
+    world.step(steps)
+    return steps / (time.perf_counter() - start)
+
+
+def timed_rates(scenes, repeats: int) -> tuple[dict, dict]:
+    """({(scene name, engine): [steps/s of each repeat], or why the engine has no world
+    (str)}, {(stack scene name, engine): mm its top cube moved in STACK_SECONDS after the
+    timings}). Every world is built and settled first; then each repeat times every world
+    once in turn (rates_in_rounds), so repeat r of every scene and engine falls in the same
+    stretch of the run. Ratios and growth exponents are taken repeat by repeat (a VM whose
+    speed drifts while one engine's timings run would otherwise move the ratio)."""
+    worlds, runs = {}, {}
+    for name, scene, settle, steps in scenes:
         for engine in ENGINES:
-            world = build(engine, scene)
+            world = worlds[name, engine] = build(engine, scene)
             if not isinstance(world, str):
                 world.step(settle)
-            worlds[name, engine] = world
-    rates = {key: world if isinstance(world, str) else [] for key, world in worlds.items()}
-    for _ in range(repeats):
-        for name, _, _, steps in scenes:
-            for engine in ENGINES:
-                world = worlds[name, engine]
-                if isinstance(world, str):
-                    continue
-                start = time.perf_counter()
-                world.step(steps)
-                rates[name, engine].append(steps / (time.perf_counter() - start))
+                runs[name, engine] = functools.partial(stepping_rate, world, steps)
+    rates = ENV_BENCHMARK.rates_in_rounds(runs, repeats)
+    rates.update({key: world for key, world in worlds.items() if isinstance(world, str)})
+    moved = {}
     for name, scene, _, _ in scenes:
         for engine in ENGINES:
             world = worlds[name, engine]
             if isinstance(world, str):
                 continue
-            if name.endswith("stack"):  # the top cube, after the timings
-                rates[name, engine, "moved"] = moved_mm(world, len(scene.bodies) - 1, STACK_SECONDS)
+            if name.endswith("stack"):  # the top cube
+                moved[name, engine] = moved_mm(world, len(scene.bodies) - 1, STACK_SECONDS)
             if engine != "ours":
                 world.close()
-    return rates
+    return rates, moved
 
 
 def rate_cells(ours: list, peer) -> str:
@@ -203,16 +205,16 @@ def print_solver_table(rates: dict, scenes) -> None:
               + " | ".join(rate_cells(ours, rates[name, p]) for p in PEERS) + " |")
 
 
-def print_stack_health(rates: dict, name: str) -> None:
+def print_stack_health(rates: dict, moved: dict, name: str) -> None:
     print(f"\n{name}: top cube moved in {STACK_SECONDS:.0f} s from the settled state "
           f"(bar: < {STACK_BAR_MM:g} mm for ours)\n")
     print("| engine | moved (mm) |")
     print("|---|---|")
     for engine in ENGINES:
-        moved = rates.get((name, engine, "moved"))
-        print(f"| {engine} | {rates[name, engine] if moved is None else f'{moved:.3g}'} |")
-    moved = rates[name, "ours", "moved"]
-    print(f"\nbar {'met' if moved < STACK_BAR_MM else 'NOT met'}: ours moved {moved:.3g} mm")
+        cell = f"{moved[name, engine]:.3g}" if (name, engine) in moved else rates[name, engine]
+        print(f"| {engine} | {cell} |")
+    ours = moved[name, "ours"]
+    print(f"\nbar {'met' if ours < STACK_BAR_MM else 'NOT met'}: ours moved {ours:.3g} mm")
 
 
 def growth_exponent(counts, microseconds) -> float:
@@ -247,9 +249,9 @@ def solver_section(quick: bool, repeats: int) -> None:
     print(f"\nSolver steps/s, dt = 1/240, one world (median of {repeats} timings after "
           "settling, every engine and scene timed in turn in each repeat; ratios are the "
           "median over repeats of ours / theirs)\n")
-    rates = timed_rates(scenes, repeats)
+    rates, moved = timed_rates(scenes, repeats)
     print_solver_table(rates, scenes)
-    print_stack_health(rates, "10-cube stack")
+    print_stack_health(rates, moved, "10-cube stack")
     print_pile_growth(rates, scenes)
 
 
