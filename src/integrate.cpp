@@ -150,18 +150,27 @@ void update_positions(const BodyStates& bodies, const BodyModel& model, double d
             r = rotation_from_quaternion(q);
             continue;
         }
-        const Vec3 l = bodies.angular_momentum[i], tau = bodies.torque[i];
+        // A body that took an impulse moves as its contacts sized its velocities (poses
+        // predicted with the final omega): its torque is integrated like its force, by
+        // symplectic Euler (in L already), and Buss's update adds only the torque-free
+        // gyroscopic change. A free body gets Buss's update of the whole step.
+        const bool free = acting[i] == 0;
+        const Vec3 l = bodies.angular_momentum[i];
+        const Vec3 tau = free ? bodies.torque[i] : Vec3{0.0, 0.0, 0.0};
         const Vec3 inverse_moments = model.inverse_moments[i];
         const double speed = std::sqrt(w.x * w.x + w.y * w.y + w.z * w.z);
         const int substeps = rotation_substeps(speed, dt);
         const double h = dt / substeps;
         const double energy = rotational_energy(rotate_inverse(r, l), inverse_moments);
         for (int k = 0; k < substeps; ++k) {
-            const Vec3 bar = effective_angular_velocity(r, inverse_moments, l, tau, h, order);
+            // Buss's update starts each sub-step from its own L: the torque acted on L over the
+            // whole step already (update_velocities), so sub-step k starts dt - k h of it back
+            const Vec3 lk = order == 1 ? l : sub(l, scale(dt - k * h, tau));
+            const Vec3 bar = effective_angular_velocity(r, inverse_moments, lk, tau, h, order);
             q = rotate_by_angular_velocity(q, bar, h);
             r = rotation_from_quaternion(q);
         }
-        if (keep_energy && speed > 0.0 && acting[i] == 0) {
+        if (keep_energy && speed > 0.0 && free) {
             q = restore_energy(q, r, l, inverse_moments, energy);
             r = rotation_from_quaternion(q);
         }

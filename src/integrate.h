@@ -7,6 +7,14 @@
 //     order 2: omega_bar = omega + h/2 alpha                            (Buss's second order)
 //     order 3: omega_bar = omega + h/2 alpha + h^2/6 omega'' + h^2/12 alpha x omega
 //              (Buss's third order), alpha = I^-1 (L x omega + tau).
+// Buss's update starts from the step's (sub-step's) initial state, so for a body that took no
+// impulse it is taken from L at the start of each sub-step (L minus the torque's share of the
+// step still to come): a constant torque from rest then turns the body exactly at orders 2
+// and 3, instead of counting the torque twice (once in L, once in alpha). A body that took an
+// impulse was given its velocities by contacts judged at poses predicted with the final
+// omega, so its torque stays in L alone (symplectic Euler, as the force in V) and alpha keeps
+// only the gyroscopic part L x omega: adding the torque's share again, or taking it away,
+// slides a block tipping about its edge by millimetres.
 // A step is cut into sub-steps of at most a quarter turn (|omega| h <= pi/2, slide 14), and into
 // at most MAX_ROTATION_SUBSTEPS of them: beyond 64 quarter turns a step (|omega| > 32 pi / dt,
 // 24,127 rad/s at dt = 1/240 s) each sub-step turns further, so a step's cost stays bounded
