@@ -150,10 +150,7 @@ void update_positions(const BodyStates& bodies, const BodyModel& model, double d
             r = rotation_from_quaternion(q);
             continue;
         }
-        // A body that took an impulse moves as its contacts sized its velocities (poses
-        // predicted with the final omega): its torque is integrated like its force, by
-        // symplectic Euler (in L already), and Buss's update adds only the torque-free
-        // gyroscopic change. A free body gets Buss's update of the whole step.
+        // a body that took an impulse keeps its torque in L alone (integrate.h says why)
         const bool free = acting[i] == 0;
         const Vec3 l = bodies.angular_momentum[i];
         const Vec3 tau = free ? bodies.torque[i] : Vec3{0.0, 0.0, 0.0};
