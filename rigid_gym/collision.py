@@ -20,7 +20,14 @@ class Contacts(NamedTuple):
 
     world (k,) int32; body_a, body_b (k,) int32; point (k, 3) m (the deepest point of one body
     inside the other); normal (k, 3) unit, from body_b towards body_a; depth (k,) m,
-    > 0 when overlapping. Within a pair the deepest contact comes first.
+    > 0 when overlapping, about 0 (+-1e-16) for bodies resting on each other. Within a pair
+    the deepest contact comes first. pair_impulse (k, 3) N s: the impulse the row's pair
+    transmitted to body_a during the last step (the solver resolves a pair's touching points
+    as patches, one impulse each, so there is no impulse per point; zero for a pair the last
+    step did not list, or before the first step), the same on every row of a pair. It is
+    what the solver applied, not a contact force: shock propagation stops a body against its
+    frozen supports without their reaction, so the pairs of a resting stack do not carry its
+    weight.
     """
 
     world: np.ndarray
@@ -29,6 +36,7 @@ class Contacts(NamedTuple):
     point: np.ndarray
     normal: np.ndarray
     depth: np.ndarray
+    pair_impulse: np.ndarray
 
 
 def uses_sweep(body_unbounded: np.ndarray, sweep: bool | None) -> bool:

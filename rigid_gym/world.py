@@ -303,14 +303,26 @@ class World:
         return total if self.batched else total[0]
 
     def contacts(self, margin: float = 0.0, world: int | None = None) -> Contacts:
-        """Contacts at the current poses: every point of one body inside another (depth > 0),
-        or within ``margin`` (m) of it. See :class:`rigid_gym.collision.Contacts`; rows of all
-        worlds together (or of ``world`` only), with their world index."""
+        """Contacts at the current poses: every point of one body inside another or touching
+        it (bodies resting on each other included), or within ``margin`` (m) of it, with the
+        impulse each pair transmitted in the last step. See
+        :class:`rigid_gym.collision.Contacts`; rows of all worlds together (or of ``world``
+        only), with their world index."""
         margin = float(margin)
         if not np.isfinite(margin) or margin < 0.0:
             raise ValueError(f"World.contacts: margin must be finite and >= 0 m, got {margin!r}")
         worlds = self._worlds(world, "contacts")
-        return Contacts(*self.core.contacts(margin, *self._range(worlds)))
+        rows = self.core.contacts(margin, *self._range(worlds))
+        found_world, body_a, body_b = rows[0], rows[1], rows[2]
+        impulse = np.zeros((len(found_world), 3))
+        for w in np.unique(found_world):
+            a, b, pair_impulse = self.core.pairs(int(w))
+            listed = {(int(i), int(j)): k for k, (i, j) in enumerate(zip(a, b))}
+            for row in np.nonzero(found_world == w)[0]:
+                k = listed.get((int(body_a[row]), int(body_b[row])))
+                if k is not None:
+                    impulse[row] = pair_impulse[k]
+        return Contacts(*rows, impulse)
 
     def candidate_pairs(self, margin: float = 0.0, world: int = 0) -> np.ndarray:
         """(k, 2) body indices (a, b) of the pairs the broad phase lists in ``world`` at the

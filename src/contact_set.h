@@ -13,6 +13,8 @@ struct ContactSet {
     Span<Vec3> point;         // (C,) m, world
     Span<Vec3> normal;        // (C,) towards the body being resolved
     Span<double> depth;       // (C,) m from the narrow phase, then the approach speed v_n, m/s
+    Span<double> gap;         // (C,) m, the separation at the start of the step that depth and
+                              //      v_n imply: -(depth + dt v_n) (negative: overlapping)
     Span<int64_t> group;      // (C,) the patch: its seed contact, -1 unassigned
     Span<int64_t> partner;    // (C,) the body on the other side
     Span<int64_t> source;     // (C,) the listed pair it came from

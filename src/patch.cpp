@@ -229,6 +229,93 @@ void apply_wrench(const BodyStates& bodies, const BodyModel& model, int i, doubl
         rotate(bodies.inverse_inertia[i], momentum);
 }
 
+// What the wrench should leave behind along n: the relative normal velocity at c (m/s) and
+// the relative angular velocity along each tip axis d[k] (rad/s). Restitution alone asks for
+// -e times today's (every point's approach scaled alike). A point still apart at the start of
+// the step may instead keep approaching at up to gap / dt, which
+// closes its gap within the step (speculative contact, closable in patch.h): a face resting on
+// one edge, its other edge hovering, then tips down onto its support rather than being held
+// tilted. Each point's
+// target is t_i = max(v_n,i, min(-e v_n,i, -gap_i / dt)): never faster than closing, never
+// pulling a point that closes on its own. The targets are fitted by the affine field a rigid
+// motion gives over the patch, v_n(c + u t1 + v t2) = a + v Omega.t1 - u Omega.t2 (a face;
+// an edge along `edge`: a - s Omega.(n x edge)), by least squares; exact for a flat face over
+// a flat support, whose gaps are affine in the same way.
+struct Targets {
+    double normal;
+    double tip[2];
+};
+
+Targets normal_targets(const BodyModel& model, const ContactSet& set, int64_t seed, int64_t count,
+                       Vec3 c, Vec3 t1, Vec3 t2, Vec3 edge, int tips, const Vec3* d, double vn,
+                       Vec3 w, double e, double dt) {
+    Targets out = {-e * vn, {-e * dot(w, d[0]), tips > 1 ? -e * dot(w, d[1]) : 0.0}};
+    bool closing = false;
+    for (int64_t i = seed; i < count; ++i) {
+        closing = closing || (set.group[i] == seed && closable(set.gap[i], model, dt));
+    }
+    if (!closing) {
+        return out;
+    }
+    double mean = 0.0, suu = 0.0, suv = 0.0, svv = 0.0, sut = 0.0, svt = 0.0;
+    int m = 0;
+    for (int64_t i = seed; i < count; ++i) {
+        if (set.group[i] != seed) {
+            continue;
+        }
+        const double v_i = set.depth[i];
+        double target = -e * v_i;
+        if (closable(set.gap[i], model, dt)) {
+            target = std::max(v_i, std::min(target, -set.gap[i] / dt));
+        }
+        const Vec3 q = sub(set.point[i], c);
+        const double u = tips > 1 ? dot(q, t1) : dot(q, edge), v = tips > 1 ? dot(q, t2) : 0.0;
+        mean += target;
+        suu += u * u;
+        suv += u * v;
+        svv += v * v;
+        sut += u * target;
+        svt += v * target;
+        m += 1;
+    }
+    // c is the points' centroid, so the coordinates are centred: a is the mean target
+    const double a = mean / m;
+    double slope_u, slope_v = 0.0;
+    if (tips > 1) {
+        const double det = suu * svv - suv * suv;
+        slope_u = (sut * svv - svt * suv) / det;
+        slope_v = (svt * suu - sut * suv) / det;
+    } else {
+        slope_u = sut / suu;
+    }
+    // a fit that would let some point approach faster than its target allows (points whose
+    // gaps are not affine: a face clipped against a smaller one, a curved support) keeps
+    // restitution's targets: it could drive that point into its partner
+    for (int64_t i = seed; i < count; ++i) {
+        if (set.group[i] != seed) {
+            continue;
+        }
+        const Vec3 q = sub(set.point[i], c);
+        const double fitted = a + slope_u * (tips > 1 ? dot(q, t1) : dot(q, edge)) +
+                              slope_v * (tips > 1 ? dot(q, t2) : 0.0);
+        double target = -e * set.depth[i];
+        if (closable(set.gap[i], model, dt)) {
+            target = std::max(set.depth[i], std::min(target, -set.gap[i] / dt));
+        }
+        if (fitted < target - REST_SPEED) {
+            return out;
+        }
+    }
+    out.normal = a;
+    if (tips > 1) {
+        out.tip[0] = slope_v;   // Omega.t1
+        out.tip[1] = -slope_u;  // Omega.t2
+    } else {
+        out.tip[0] = -slope_u;  // Omega.(n x edge)
+    }
+    return out;
+}
+
 }  // namespace
 
 Vec3 relative_point_velocity(const BodyStates& bodies, int a, int b, Vec3 ra, Vec3 rb) {
@@ -274,7 +361,7 @@ void apply_with_spin_friction(const BodyStates& bodies, const BodyModel& model, 
 
 PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int a, int b,
                           Movable movable, const ContactSet& set, int64_t seed, int64_t count,
-                          double e, double mu, Vec3 prior) {
+                          double e, double mu, Vec3 prior, double dt) {
     const PatchResult unresolved = {UNRESOLVED, {0.0, 0.0, 0.0}};
     const PatchResult separating = {SEPARATING, {0.0, 0.0, 0.0}};
     // geometric centroid and mean normal of the patch
@@ -329,17 +416,18 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
     if (movable.b) {
         add_body_wrench_matrix(model.inverse_mass[b], bodies.inverse_inertia[b], rb, big);
     }
+    const Targets target = normal_targets(model, set, seed, count, c, t1, t2, edge, tips, d, vn, w, e, dt);
     Matrix6 system;
     double rhs[6], sol[6];
     if (mu > 0.0) {
         // static: j (3) and m along every constrained rotation
         reduced_system(big, d, tips + 1, system);
-        rhs[0] = -v.x - e * vn * n.x;
-        rhs[1] = -v.y - e * vn * n.y;
-        rhs[2] = -v.z - e * vn * n.z;
+        rhs[0] = -v.x + target.normal * n.x;
+        rhs[1] = -v.y + target.normal * n.y;
+        rhs[2] = -v.z + target.normal * n.z;
         for (int k = 0; k < tips + 1; ++k) {
             const double spin = w.x * d[k].x + w.y * d[k].y + w.z * d[k].z;
-            rhs[3 + k] = k == tips ? -spin : -(1.0 + e) * spin;
+            rhs[3 + k] = k == tips ? -spin : target.tip[k] - spin;
         }
         if (solve_dense(system, rhs, 3 + tips + 1, sol)) {
             const Vec3 j = {sol[0], sol[1], sol[2]};
@@ -371,9 +459,9 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
         s = {n.x - friction * u.x / ut, n.y - friction * u.y / ut, n.z - friction * u.z / ut};
     }
     sliding_system(big, d, tips, s, n, system);
-    rhs[0] = -(1.0 + e) * vn;
+    rhs[0] = target.normal - vn;
     for (int k = 0; k < tips; ++k) {
-        rhs[1 + k] = -(1.0 + e) * (w.x * d[k].x + w.y * d[k].y + w.z * d[k].z);
+        rhs[1 + k] = target.tip[k] - (w.x * d[k].x + w.y * d[k].y + w.z * d[k].z);
     }
     if (!solve_dense(system, rhs, 1 + tips, sol)) {
         return unresolved;

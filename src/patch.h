@@ -24,6 +24,8 @@
 // an edge, and the caller falls back to a single impulse.
 #pragma once
 
+#include <cmath>
+
 #include "contact_set.h"
 
 namespace rg {
@@ -34,6 +36,24 @@ namespace rg {
 // on the table used all 10 contact passes). Gravity alone brings 0.04 m/s per step of 1/240 s,
 // so nothing below the floor can build up; 1e-9 m/s is 1 nm of drift in 1 s.
 constexpr double REST_SPEED = 1e-9;
+
+// m: contact points this close at the start of the step count as touching. Far below the
+// overlap slop (overlap.h) and the 0.1 mm a body should rest within, far above the round-off
+// of a separation (~1e-16 m): a body resting on its support stays the bit-exact fixed point
+// it was.
+constexpr double CLOSED_GAP = 1e-6;
+
+// May a contact point apart by `gap` (m) at the start of the step keep approaching until it
+// closes the gap within the step (speculative contact, patch.cpp and solver.cpp)? Only gaps
+// up to what gravity closes in one step, |g| dt^2: an impulse at e = 0 stops a body up to that
+// far short of its support, where it would otherwise hang (GBF's contact stage judges
+// predicted poses). Larger gaps, left by fast impacts, close under gravity in later steps:
+// closing them at once in a pile drove bodies deeper into each other (the linearised gap of
+// a fast, turning body is least exact).
+inline bool closable(double gap, const BodyModel& model, double dt) {
+    const Vec3 g = model.gravity;
+    return gap > CLOSED_GAP && gap <= dt * dt * std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z);
+}
 
 enum PatchOutcome { APPLIED, SEPARATING, UNRESOLVED };
 
@@ -57,7 +77,7 @@ struct Movable {
 // single impulse.
 PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int a, int b,
                           Movable movable, const ContactSet& set, int64_t seed, int64_t count,
-                          double e, double mu, Vec3 prior);
+                          double e, double mu, Vec3 prior, double dt);
 
 // (V_a + w_a x r_a) - (V_b + w_b x r_b).
 Vec3 relative_point_velocity(const BodyStates& bodies, int a, int b, Vec3 ra, Vec3 rb);

@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include "narrow_phase.h"
+#include "patch.h"
 
 namespace rg {
 
@@ -39,6 +40,7 @@ std::vector<int32_t> candidate_pairs(StepContext& context, double margin, int w)
 
 ContactRows detect_contacts(StepContext& context, double margin, int first, int last) {
     const Geometry& geo = context.geometry();
+    margin += CLOSED_GAP;  // resting contacts: touching to round-off, as the solver counts them
     ContactRows rows;
     Array<Vec3> point(64), normal(64);
     Array<double> depth(64);

@@ -14,7 +14,9 @@ namespace rg {
 std::vector<int32_t> candidate_pairs(StepContext& context, double margin, int w);
 
 // Contacts as flat rows over worlds [first, last), deepest first within each pair: every
-// point of one body inside another (depth > 0), or within margin (m) of it.
+// point of one body inside another or touching it (depth > -CLOSED_GAP, patch.h: a body
+// resting on another touches it to round-off, at a depth of about +-1e-16 m), or within
+// margin (m) of it.
 struct ContactRows {
     std::vector<int32_t> world, body_a, body_b;
     std::vector<double> point, normal, depth;  // point and normal: 3 per row

@@ -82,7 +82,7 @@ int resolve_supported_body(WorldStep& w, int body, int64_t current, double dt) {
         }
         count += found;
     }
-    return applied + resolve_patches(w, body, {true, false}, wide, count, SHOCK, 0.0);
+    return applied + resolve_patches(w, body, {true, false}, wide, count, dt, SHOCK, 0.0);
 }
 
 // resolve_supported_body for bodies by_level[start:end] of level `current`; impulses applied.

@@ -113,6 +113,27 @@ void record_impulse(const WorldStep& w, const ContactSet& set, int64_t seed, Vec
     total = add(total, scale(set.orient[seed], j));
 }
 
+// The most negative restitution patch seed may take in the contact and shock stages so that
+// it still closes the gap it starts the step with (speculative contact, closable in patch.h):
+// the patch may keep approaching at gap / dt, gap being its points' least separation at the
+// start of the step, against the approach of its fastest point. -1 or below: no point reaches
+// its partner within the step. 0 when a point touches or its gap is not closable.
+double closing_restitution(const BodyModel& model, const ContactSet& set, int64_t seed,
+                           int64_t count, double dt) {
+    double gap = INFINITY, fastest = 0.0;
+    for (int64_t i = seed; i < count; ++i) {
+        if (set.group[i] == seed) {
+            gap = std::min(gap, set.gap[i]);
+            fastest = std::max(fastest, -set.depth[i]);
+        }
+    }
+    if (fastest <= REST_SPEED) {
+        return 0.0;
+    }
+    const double reached = -gap / (dt * fastest);
+    return reached <= -1.0 || closable(gap, model, dt) ? reached : 0.0;
+}
+
 // COLLISION: the pair's max(e_a, e_b); CONTACT: the ramp value; SHOCK: 0.
 double restitution_for(const WorldStep& w, int a, int b, ImpulseMode mode, double ramp_e) {
     if (mode == COLLISION) {
@@ -158,7 +179,7 @@ int resolve_pair(WorldStep& w, int64_t k, int a, int b, double dt, Vec3 lookahea
                  ImpulseMode mode, double ramp_e, Movable movable) {
     const ContactSet& set = w.scratch;
     const int64_t count = gather_pair(w, {k, a, 0.0}, dt, lookahead, set, 0);
-    return resolve_patches(w, a, movable, set, std::min(count, set.depth.size), mode, ramp_e);
+    return resolve_patches(w, a, movable, set, std::min(count, set.depth.size), dt, mode, ramp_e);
 }
 
 // The contacts are grouped into patches of similar normal and rigidly co-moving partners (a
@@ -175,16 +196,19 @@ int resolve_pair(WorldStep& w, int64_t k, int a, int b, double dt, Vec3 lookahea
 // over the whole step: the patch wrench is checked with what its pairs already transmitted
 // this step added, and every impulse applied is added there.
 int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set, int64_t count,
-                    ImpulseMode mode, double ramp_e) {
+                    double dt, ImpulseMode mode, double ramp_e) {
     if (count == 0) {
         return 0;
     }
     const BodyStates& s = w.bodies;
     const BodyModel& model = w.model;
-    // approach speed of every contact, kept in set.depth (negative: approaching)
+    // approach speed of every contact, kept in set.depth (negative: approaching), and the
+    // separation at the start of the step that it and the predicted depth imply
     for (int64_t i = 0; i < count; ++i) {
         const Vec3 v = relative_velocity(w, set, a, static_cast<int>(set.partner[i]), i);
-        set.depth[i] = dot(v, set.normal[i]);
+        const double vn = dot(v, set.normal[i]);
+        set.gap[i] = -(set.depth[i] + dt * vn);
+        set.depth[i] = vn;
         set.group[i] = -1;
     }
     int applied = 0;
@@ -193,12 +217,20 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
             continue;
         }
         const int b = static_cast<int>(set.partner[seed]);
-        const double e = restitution_for(w, a, b, mode, ramp_e);
         const double mu = std::sqrt(model.friction[a] * model.friction[b]);
         const int approaching = gather_patch(s, set, seed, count);
+        const double e = restitution_for(w, a, b, mode, ramp_e);
+        double closing = 0.0;
+        if (mode != COLLISION) {  // the collision stage predicts dt^2 g ahead: depth is no gap
+            closing = closing_restitution(model, set, seed, count, dt);
+            if (closing <= -1.0) {
+                continue;
+            }
+        }
         if (mode != COLLISION && !movable.b) {
             const Vec3 prior = prior_impulse(w, set, seed, count);
-            const PatchResult result = resolve_patch(s, model, a, b, movable, set, seed, count, e, mu, prior);
+            const PatchResult result =
+                resolve_patch(s, model, a, b, movable, set, seed, count, e, mu, prior, dt);
             if (result.outcome == APPLIED) {
                 record_impulse(w, set, seed, result.impulse);
                 applied += 1;
@@ -226,7 +258,7 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
         if (movable.b) {
             add_point_mass_matrix(model.inverse_mass[b], s.inverse_inertia[b], rb, k);
         }
-        const Vec3 j = contact_impulse(k, v, n, e, mu);
+        const Vec3 j = contact_impulse(k, v, n, std::min(e, closing), mu);
         if (mu > 0.0 && radius > 0.0) {
             apply_with_spin_friction(s, model, a, b, movable, j, {0.0, 0.0, 0.0}, ra, rb, n,
                                      mu * dot(j, n) * radius);

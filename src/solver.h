@@ -35,10 +35,12 @@ enum ImpulseMode { COLLISION, CONTACT, SHOCK };
 //
 // In the contact stage, a pair whose movable bodies are in no other pair (a cube on the
 // table, two boxes meeting in the air) skips the restitution ramp: the ramp shares impulses
-// out among contacts that disturb each other, and such a pair disturbs nothing, so its early
-// passes would only scale its own approach down before the last pass (e = 0) stops it. Its
-// passes run at e = 0 once the other pairs' passes are done (they share no movable body, so
-// the order between the two does not matter), until one applies nothing.
+// out among contacts that disturb each other, and such a pair disturbs nothing. Its passes
+// run at e = 0 once the other pairs' passes are done (they share no movable body, so the
+// order between the two does not matter), until one applies nothing. That e = 0 stops the
+// approach without leaving the body hanging short of its support: as in every pass of the
+// contact and shock stages, a gap that gravity would close within the step is closed
+// (speculative contact, closable in patch.h), which a ramp's early passes did only by chance.
 void resolve_world_contacts(WorldStep& w, int64_t pairs, double dt, ImpulseMode mode, int passes);
 
 // The shock-propagation stage over the first `pairs` listed pairs (shock.cpp).
@@ -64,6 +66,6 @@ int resolve_pair(WorldStep& w, int64_t k, int a, int b, double dt, Vec3 lookahea
 // Resolve body a's contacts in `set` (normals towards a; each against the body set.partner[i])
 // in stage `mode`; returns the number of impulses applied (solver.cpp says how).
 int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set, int64_t count,
-                    ImpulseMode mode, double ramp_e);
+                    double dt, ImpulseMode mode, double ramp_e);
 
 }  // namespace rg

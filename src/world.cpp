@@ -39,6 +39,7 @@ void ContactSetBuffers::allocate(int num_worlds, int64_t num_contacts) {
         vectors->assign(rows, {0.0, 0.0, 0.0});
     }
     depth.assign(rows, 0.0);
+    gap.assign(rows, 0.0);
     orient.assign(rows, 0.0);
     group.assign(rows, 0);
     partner.assign(rows, 0);
@@ -47,7 +48,8 @@ void ContactSetBuffers::allocate(int num_worlds, int64_t num_contacts) {
 
 ContactSet ContactSetBuffers::rows(int w) {
     return {world_rows(point, w, contacts),    world_rows(normal, w, contacts),
-            world_rows(depth, w, contacts),    world_rows(group, w, contacts),
+            world_rows(depth, w, contacts),    world_rows(gap, w, contacts),
+            world_rows(group, w, contacts),
             world_rows(partner, w, contacts),  world_rows(source, w, contacts),
             world_rows(orient, w, contacts),   world_rows(centre_a, w, contacts),
             world_rows(centre_b, w, contacts)};

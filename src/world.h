@@ -128,7 +128,7 @@ constexpr int SUPPORT_CONTACTS = 4;
 // The batched buffers behind a ContactSet: B worlds of C contacts.
 struct ContactSetBuffers {
     Array<Vec3> point, normal, centre_a, centre_b;
-    Array<double> depth, orient;
+    Array<double> depth, gap, orient;
     Array<int64_t> group, partner, source;
     int64_t contacts = 0;
 

@@ -194,6 +194,66 @@ def stack_drift(world: rg.World) -> tuple[float]:
     return (float(np.abs(world.position - start).max()),)
 
 
+SPIN_TORQUE, SPIN_SECONDS = 0.5, 0.5  # N m about the body's z axis (I_z = 3 kg m^2), s
+
+
+def spin_up_error(world: rg.World) -> tuple[float]:
+    """|theta(T) - tau T^2 / (2 I_z)| / that: a free body at rest turned by a constant torque
+    about its principal z axis for T = 0.5 s (a rotation about a fixed axis: exact at every
+    rotation order that integrates the torque at the order it claims)."""
+    steps = int(round(SPIN_SECONDS / world.dt))
+    for _ in range(steps):
+        world.apply_torque(0, (0.0, 0.0, SPIN_TORQUE))
+        world.step()
+    rotation = world.rotation[0]
+    angle = np.arctan2(rotation[1, 0], rotation[0, 0])
+    exact = 0.5 * SPIN_TORQUE / TOP_MOMENTS[2] * (steps * world.dt) ** 2
+    return (abs(angle - exact) / exact,)
+
+
+PUSH_SLIDE_MU, PUSH_SLIDE_FORCE = 0.1, 0.2  # the push in units of m g: slides (tips above 0.25)
+PUSH_TIP_MU, PUSH_TIP_FORCE = 0.6, 0.3
+PUSH_SECONDS, TIP_DEG = 0.4, 30.0
+
+
+def push_at_top(world: rg.World, force: float, until_tilt_deg: float = 90.0):
+    """Push the standing block along +x at the centre of its top face with ``force`` x m g
+    for PUSH_SECONDS (or until it tilts ``until_tilt_deg``). Returns the push time (s), the
+    velocity x at its end (m/s), the tilt (rad) and the x travel of the leading bottom edge
+    (m)."""
+    half = np.array(scenes.BLOCK_HALF)
+    edge_local = np.array([half[0], 0.0, -half[2]])
+    edge0 = world.position[1] + world.rotation[1] @ edge_local
+    steps = 0
+    for _ in range(int(round(PUSH_SECONDS / world.dt))):
+        top = world.position[1] + world.rotation[1] @ np.array([0.0, 0.0, half[2]])
+        world.apply_force(1, (force * G, 0.0, 0.0), point=top)
+        world.step()
+        steps += 1
+        if world.rotation[1][2, 2] < np.cos(np.radians(until_tilt_deg)):
+            break
+    tilt = float(np.arccos(min(1.0, world.rotation[1][2, 2])))
+    edge = world.position[1] + world.rotation[1] @ edge_local
+    return steps * world.dt, float(world.velocity[1, 0]), tilt, float(edge[0] - edge0[0])
+
+
+def push_slide_errors(world: rg.World) -> tuple[float, float]:
+    """Pushed at its top with F = 0.2 m g on mu = 0.1 (tipping needs F > m g w / (2 h) =
+    0.25 m g): |v(T) / T - (F/m - mu g)| / (F/m - mu g) over T = 0.4 s, and the tilt (rad,
+    exact 0)."""
+    seconds, vx, tilt, _ = push_at_top(world, PUSH_SLIDE_FORCE)
+    exact = (PUSH_SLIDE_FORCE - PUSH_SLIDE_MU) * G
+    return (abs(vx / seconds - exact) / exact, tilt)
+
+
+def push_tip_error(world: rg.World) -> tuple[float]:
+    """Pushed at its top with F = 0.3 m g on mu = 0.6: it tips about its leading bottom edge,
+    which friction holds (the ideal pivot needs |f| / N = 0.27 < mu), so the edge's travel by
+    30 deg of tilt is exactly 0 (m)."""
+    _, _, tilt, travel = push_at_top(world, PUSH_TIP_FORCE, TIP_DEG)
+    return (abs(travel) if np.degrees(tilt) >= TIP_DEG else float("nan"),)
+
+
 CASES = (
     Case("free_fall", "ball in free flight for 1 s", "x0 + v0 t + g t^2 / 2",
          ("position, relative error",), scenes.free_ball, free_fall_error, {"default": {}}),
@@ -219,6 +279,24 @@ CASES = (
           "flip period, relative error"),
          lambda: scenes.spinning_body(TOP_MOMENTS, TOP_OMEGA), torque_free_errors,
          ROTATION_SETTINGS),
+    Case("spin_up", f"body at rest, constant torque {SPIN_TORQUE:g} N m about I_z = "
+         f"{TOP_MOMENTS[2]:g} kg m^2, {SPIN_SECONDS:g} s", "theta = tau t^2 / (2 I)",
+         ("angle, relative error",), lambda: scenes.spinning_body(TOP_MOMENTS, (0.0, 0.0, 0.0)),
+         spin_up_error, {f"rotation order {k}": {"rotation_order": k} for k in (1, 2, 3)},
+         "order 1 turns by the step's new angular velocity (symplectic Euler), an error of "
+         "dt / T; orders 2 and 3 integrate the torque exactly."),
+    Case("push_slide", f"block 0.1 x 0.1 x 0.2 m pushed at its top, F = {PUSH_SLIDE_FORCE:g} m g, "
+         f"mu = {PUSH_SLIDE_MU:g}", "slides upright at a = F/m - mu g",
+         ("mean acceleration, relative error", "tilt, rad"),
+         lambda: scenes.standing_block(PUSH_SLIDE_MU), push_slide_errors, PASS_SETTINGS,
+         "every push step after the first accelerates the block at F/m - mu g to round-off; "
+         "in the first, friction's direction is taken from the base's velocity before the "
+         "tip constraints act, and points forwards once (a = F/m + mu g): an error of "
+         "2 mu g dt / (a T), first order."),
+    Case("push_tip", f"block 0.1 x 0.1 x 0.2 m pushed at its top, F = {PUSH_TIP_FORCE:g} m g, "
+         f"mu = {PUSH_TIP_MU:g}", "tips about a fixed edge: travel 0",
+         (f"edge travel by {TIP_DEG:g} deg of tilt, m",),
+         lambda: scenes.standing_block(PUSH_TIP_MU), push_tip_error, PASS_SETTINGS),
     Case("stack_drift", f"{STACK_COUNT}-cube stack resting for {STACK_SECONDS:g} s", "at rest: drift 0",
          ("largest displacement, m",), lambda: scenes.cube_stack(STACK_COUNT), stack_drift,
          {**PASS_SETTINGS, "no shock propagation": {"shock_sweeps": 0}}),

@@ -121,3 +121,30 @@ def pile(count: int, seed: int = 0) -> rg.Scene:
                        position=(x + rng.uniform(-0.01, 0.01), y + rng.uniform(-0.01, 0.01),
                                  0.05 + 0.09 * layer), orientation=q / np.linalg.norm(q))
     return scene
+
+
+BLOCK_HALF = (0.05, 0.05, 0.1)  # m: the 0.1 x 0.1 x 0.2 m block pushed at its top
+
+
+def standing_block(friction: float) -> rg.Scene:
+    """A 1 kg block ``BLOCK_HALF`` standing on the ground, both of friction ``friction``."""
+    scene = rg.Scene()
+    scene.add_ground(friction=friction)
+    scene.add_body(rg.Box(BLOCK_HALF), mass=1.0, position=(0.0, 0.0, BLOCK_HALF[2]),
+                   friction=friction)
+    return scene
+
+
+def dropped_cubes(height: float, on_cube: bool = False) -> rg.Scene:
+    """A cube released ``height`` (m) above the ground, or above a cube resting on it."""
+    scene = rg.Scene()
+    scene.add_ground(friction=0.5)
+    base = 0.0
+    if on_cube:
+        scene.add_body(rg.Box((CUBE_HALF,) * 3), mass=1.0, friction=0.5,
+                       position=(0.0, 0.0, CUBE_HALF))
+        base = 2 * CUBE_HALF
+    scene.add_body(rg.Box((CUBE_HALF,) * 3), mass=1.0, friction=0.5,
+                   position=(0.0, 0.0, base + CUBE_HALF + height))
+    return scene
+

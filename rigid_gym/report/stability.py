@@ -366,6 +366,31 @@ def dt_range(scale: float) -> list[StiffResult]:
                         checks, cost, phases)]
 
 
+SETTLE_DTS = (1 / 240, 1 / 60, 0.1)
+SETTLE_SLOP = 1e-4  # m: overlap.h's OVERLAP_SLOP, the overlap the solver leaves uncorrected
+
+
+def drop_and_settle(scale: float) -> list[StiffResult]:
+    """A cube dropped 1 m onto the ground, and onto a cube resting there, at dt = 1/240, 1/60
+    and 0.1 s: after 3 s each rests within the slop of its support (height error, either
+    sign)."""
+    checks, rows = [], []
+    for on_cube in (False, True):
+        for dt in SETTLE_DTS:
+            world = rg.World(scenes.dropped_cubes(1.0, on_cube), dt=dt)
+            world.step(int(round(3.0 / dt)))
+            top = len(world.position) - 1
+            exact = CUBE_HALF * (3 if on_cube else 1)
+            error = float(abs(world.position[top, 2] - exact))
+            where = "on a cube" if on_cube else "on the ground"
+            label = f"dt {dt:g} s" if dt >= 0.05 else f"dt 1/{round(1 / dt)}"
+            checks.append(Check(f"{where}, {label}: rest height error", error, SETTLE_SLOP, "m",
+                                "within the overlap slop of its support"))
+            rows.append([where, label, f"{(world.position[top, 2] - exact) * 1e3:+.4f}"])
+    return [StiffResult("drop_settle", "cube dropped 1 m, alone and onto a cube, 3 s", checks,
+                        float("nan"), {}, (["support", "dt", "rest height - exact (mm)"], rows))]
+
+
 def mass_range(scale: float) -> list[StiffResult]:
     """Two 7-cube towers in one scene with masses 1e-3, 1e-2, ..., 1e3 kg: light at the bottom
     (each cube 10x heavier than the one under it) and heavy at the bottom, 10 s x scale."""
@@ -390,7 +415,7 @@ def big_pile(scale: float) -> list[StiffResult]:
 
 CASES: tuple[Callable[[float], list[StiffResult]], ...] = (
     towers, pyramid, heavy_on_light, fast_spinner, thin_rod, elastic, friction_extremes,
-    tunnelling, dt_range, mass_range, big_pile)
+    tunnelling, dt_range, drop_and_settle, mass_range, big_pile)
 """Every stiff/extreme case: (scale) -> results; scale 1 is the full report, < 1 shortens
 runs (the quick report)."""
 
