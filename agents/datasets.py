@@ -53,7 +53,7 @@ AUTHOR = "rigid_gym"
 RECIPE_SEED = 3_000_000
 """The shipped datasets' first reset seeds start here, apart from the training seeds (small),
 the evaluation seeds (1,000,000 on) and the training demonstrations' (2,000,000 on)."""
-RECIPE_NOISE = 0.3
+RECIPE_NOISE = 0.1
 """The noisy datasets' action noise: Gaussian, standard deviation in action units (the
 action space is [-1, 1] per entry), added to the scripted action and clipped."""
 
@@ -216,6 +216,29 @@ def write_dataset(dataset_id: str, env_id: str, policy: str, episodes: int, nois
                      {"first_seed": seed})
     env.close()
     return dataset
+
+
+def write_streams(dataset_id: str, env_id: str, policy: str, seeds: list[int], episodes: int,
+                  progress: bool = False) -> MinariDataset:
+    """Play one stream of ``episodes`` episodes of ``env_id`` per seed in ``seeds``, each in an
+    env of its own whose first reset takes the seed and whose later resets take none (as a
+    stable-baselines3 VecEnv seeds its envs), and write them, stream after stream, as the
+    Minari dataset ``dataset_id``; returns it. Only the first episode of a stream has a seed,
+    and ``verify`` replays the others after it."""
+    shown = _bar(episodes * len(seeds), f"{env_id}: {policy} episodes", progress)
+    buffers = []
+    try:
+        for seed in seeds:
+            env = gym.make(env_id)
+            buffers += play(env, make_actor(env, policy, seed), [seed] + [None] * (episodes - 1),
+                            on_episode=lambda e: shown.update(1))
+    finally:
+        shown.close()
+    description = (f"{len(seeds)} stream(s) of {episodes} episodes of {env_id} played by the "
+                   f"{policy} policy; a stream's first episode reset with its seed "
+                   f"({', '.join(map(str, seeds))}), the others without one.")
+    return create(dataset_id, env, buffers, policy, 0.0, description,
+                  {"stream_seeds": list(seeds), "stream_episodes": episodes})
 
 
 def _bar(total: int, description: str, shown: bool):

@@ -6,7 +6,7 @@
     rigid-gym replay FILE [FILE ...]
     rigid-gym train ENV_ID [--algo sac|tqc|ppo] [--steps N] [--seed S] [--n-envs N] [--out DIR]
                     [--eval-freq N] [--eval-episodes N] [--checkpoint-freq N] [--resume]
-                    [--progress-bar]
+                    [--demos N] [--demo-dataset ID] [--progress-bar]
     rigid-gym sweep ENV_ID [ENV_ID ...] --seeds S [S ...] [--param KEY=V1,V2 ...] [--steps N]
                     [--out DIR] [--name NAME] [--eval-freq N] [--eval-episodes N]
                     [--cpus-per-trial C] [--max-failures K]
@@ -182,7 +182,8 @@ def train(args) -> int:
                           n_envs=args.n_envs, out=args.out, eval_freq=args.eval_freq,
                           eval_episodes=args.eval_episodes,
                           checkpoint_freq=args.checkpoint_freq, progress_bar=args.progress_bar,
-                          demonstrations=args.demos, resume=resume, progress=True)
+                          demonstrations=args.demos, demo_dataset=args.demo_dataset,
+                          resume=resume, progress=True)
     print(f"trained {args.env_id}: {folder / 'model.zip'}")
     if args.eval_freq:
         last = (folder / "evaluations.csv").read_text().strip().splitlines()[-1].split(",")
@@ -366,8 +367,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--checkpoint-freq", type=bounded(int, 0, 10**9), default=0,
                    help="env steps between checkpoints (0: none)")
     p.add_argument("--demos", type=bounded(int, 0, 10**6), default=None,
-                   help="scripted episodes put in the replay buffer first (off-policy only; "
+                   help="demonstration episodes put in the replay buffer first (off-policy only; "
                         "default: hyperparams.yml, else 0)")
+    p.add_argument("--demo-dataset", metavar="ID", default=None,
+                   help="the Minari dataset the --demos episodes come from (default: the "
+                        "scripted policy's, written for the run to a temporary folder)")
     p.add_argument("--resume", action="store_true",
                    help="go on from the run's newest checkpoint (see --checkpoint-freq)")
     p.add_argument("--progress-bar", action="store_true",
