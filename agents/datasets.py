@@ -208,14 +208,12 @@ def write_dataset(dataset_id: str, env_id: str, policy: str, episodes: int, nois
                        noise, np.random.default_rng(seed), lambda e: shown.update(1))
     finally:
         shown.close()
+        env.close()
     description = (f"{episodes} episodes of {env_id} played by the {policy} policy"
                    + (f" with Gaussian action noise of standard deviation {noise:g}"
                       if noise else "")
                    + f"; episode k reset with seed {seed} + k.")
-    dataset = create(dataset_id, env, buffers, policy, noise, description,
-                     {"first_seed": seed})
-    env.close()
-    return dataset
+    return create(dataset_id, env, buffers, policy, noise, description, {"first_seed": seed})
 
 
 def write_streams(dataset_id: str, env_id: str, policy: str, seeds: list[int], episodes: int,
@@ -232,6 +230,7 @@ def write_streams(dataset_id: str, env_id: str, policy: str, seeds: list[int], e
             env = gym.make(env_id)
             buffers += play(env, make_actor(env, policy, seed), [seed] + [None] * (episodes - 1),
                             on_episode=lambda e: shown.update(1))
+            env.close()
     finally:
         shown.close()
     description = (f"{len(seeds)} stream(s) of {episodes} episodes of {env_id} played by the "

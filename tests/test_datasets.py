@@ -174,3 +174,20 @@ def test_an_existing_dataset_is_not_overwritten(capsys):
     with pytest.raises(SystemExit):
         main(args)
     assert "rigid_gym/push/a-v0 already exists" in capsys.readouterr().err
+
+
+def test_behaviour_cloning_fits_the_dataset_actions():
+    from rigid_gym.agents.offline import clone
+
+    dataset = datasets.write_dataset("rigid_gym/push/bc-test-v0", "rigid_gym/Push-v0",
+                                     "scripted", 3)
+    policy = clone("rigid_gym/push/bc-test-v0", hidden=(64, 64), epochs=60, batch_size=32)
+    observations = {k: np.concatenate([e.observations[k][:-1] for e in dataset])
+                    for k in ("observation", "desired_goal")}
+    actions = np.concatenate([e.actions for e in dataset])
+    predicted, _ = policy.predict(observations)
+    assert predicted.shape == actions.shape and np.all(np.abs(predicted) <= 1.0)
+    error = np.mean((predicted - actions) ** 2)
+    assert error < 0.1 * np.mean((actions - actions.mean(0)) ** 2)  # far better than the mean
+    action, _ = policy.predict({k: v[0] for k, v in observations.items()})  # one observation
+    assert action.shape == (3,)
