@@ -256,7 +256,8 @@ def datasets_root() -> Path:
 @contextlib.contextmanager
 def temporary_datasets_root() -> Iterator[Path]:
     """Point MINARI_DATASETS_PATH at a new temporary folder for the ``with`` block (the
-    datasets written there are deleted after it), then back to what it was."""
+    datasets written there are deleted after it), then back to what it was. Minari reads the
+    folder from the process's environment, so other threads see it too while it is set."""
     before = os.environ.get("MINARI_DATASETS_PATH")
     with tempfile.TemporaryDirectory(prefix="rigid_gym-datasets-") as folder:
         os.environ["MINARI_DATASETS_PATH"] = folder
