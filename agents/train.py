@@ -44,7 +44,7 @@ from stable_baselines3.common.vec_env import VecCheckNan
 import rigid_gym  # noqa: F401  (registers the env ids)
 from rigid_gym.agents.algorithms import algorithm_class
 from rigid_gym.agents.evaluate import success_rate
-from rigid_gym.agents.progress import bar, note
+from rigid_gym.agents.progress import note
 
 HYPERPARAMS = Path(__file__).with_name("hyperparams.yml")
 DEMO_SEED = 2_000_000
@@ -76,8 +76,8 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
           n_envs: int | None = None, out: str | Path = "runs", eval_freq: int = 10_000,
           eval_episodes: int = 20, checkpoint_freq: int = 0, progress_bar: bool = False,
           threads: int = 1, verbose: int = 0, overrides: dict | None = None,
-          demonstrations: int | None = None, resume: str | Path | None = None,
-          on_checkpoint: Callable[[Path], None] | None = None, progress: bool = False) -> Path:
+          demonstrations: int | None = None, demo_dataset: str | None = None,
+          resume: str | Path | None = None, on_checkpoint: Callable[[Path], None] | None = None, progress: bool = False) -> Path:
     """Train on ``env_id`` and return the run folder (see the module docstring).
 
     algo, timesteps (env steps), n_envs: override hyperparams.yml. eval_freq: env steps between
@@ -86,7 +86,8 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     PyTorch's CPU threads. overrides: algorithm arguments that replace those of
     hyperparams.yml (e.g. learning_starts). demonstrations: scripted episodes put in the replay
     buffer before training (off-policy only; default: hyperparams.yml's ``demonstrations``,
-    else 0), see ``add_demonstrations``. resume: a checkpoint folder of this run
+    else 0), see ``add_demonstrations``; demo_dataset: the Minari dataset id they come from
+    (default: the scripted policy's, written for the run into a temporary folder). resume: a checkpoint folder of this run
     (``latest_checkpoint``) to go on from: its model (with the algorithm arguments it was made
     with; ``overrides`` and ``demonstrations`` are not applied again), replay buffer and
     files, trained on to ``timesteps`` in all (not bit-identical to a run never stopped: the
@@ -137,8 +138,8 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
             kwargs.update(replay_buffer_class=HerReplayBuffer,
                           replay_buffer_kwargs=dict(settings["her"]))
         model = cls("MultiInputPolicy", env, seed=seed, verbose=verbose, **kwargs)
-        demo = add_demonstrations(model, env_id, demonstrations, seed, progress) \
-            if demonstrations else None
+        demo = add_demonstrations(model, env_id, demonstrations, seed, progress,
+                                  demo_dataset) if demonstrations else None
         _write_run(folder, env_id, algo, seed, timesteps, n_envs, kwargs, demo)
 
     before = record if resume is not None else {}  # the seconds of the parts before a resume
@@ -191,10 +192,16 @@ def _count(value, name: str, low: int) -> int:
 
 
 def add_demonstrations(model, env_id: str, episodes: int, seed: int,
-                       progress: bool = False) -> dict:
-    """Put ``episodes`` episodes of the scripted policy (``rigid_gym.envs.scripted``) into
-    ``model``'s replay buffer, as SB3 stores its own transitions, and return
-    ``{"episodes", "env_steps", "success_rate"}``.
+                       progress: bool = False, dataset: str | None = None) -> dict:
+    """Put ``episodes`` demonstration episodes into ``model``'s replay buffer, as SB3 stores
+    its own transitions, and return ``{"episodes", "env_steps", "success_rate", "dataset"}``.
+
+    The episodes come from a Minari dataset (``rigid_gym.agents.datasets``): ``dataset``, an
+    id (its first episodes: env r of the model's n_envs takes the r-th consecutive run of
+    ceil(episodes / n_envs) of them), or when None, one written for the call into a temporary
+    folder (and deleted after it): the scripted policy (``rigid_gym.envs.scripted``), env r's
+    stream of episodes seeded at its first reset with DEMO_SEED + 1000 * seed + r, as a
+    stable-baselines3 VecEnv of the model's n_envs made with that seed would play it.
 
     Demonstrations in the replay buffer (Vecerik et al. 2017, Nair et al. 2018) show a sparse
     reward off-policy learner what success looks like on tasks that random exploration almost
@@ -203,34 +210,74 @@ def add_demonstrations(model, env_id: str, episodes: int, seed: int,
     ``make_demo_buffer`` method (bc_sac) also gets them in a buffer of their own, for its
     behaviour-cloning loss. ``progress``: draw a bar of the episodes on standard error.
     """
-    from rigid_gym.envs.scripted import scripted_policy
+    from rigid_gym.agents import datasets
 
+    per_env = -(-episodes // model.n_envs)
+    if dataset is not None:
+        note(f"{env_id}: demonstrations from the Minari dataset {dataset}", progress)
+        return fill_replay_buffer(model, datasets.load(dataset), env_id, episodes) | {
+            "dataset": dataset}
+    note(f"{env_id}: {per_env * model.n_envs} scripted demonstrations, written as a Minari "
+         "dataset to a temporary folder", progress)
+    with datasets.temporary_datasets_root():
+        seeds = [DEMO_SEED + 1000 * seed + rank for rank in range(model.n_envs)]
+        data = datasets.write_streams(f"rigid_gym/{env_id.split('/')[-1]}/demonstrations-v0",
+                                      env_id, "scripted", seeds, per_env, progress)
+        return fill_replay_buffer(model, data, env_id, episodes) | {"dataset": None}
+
+
+def fill_replay_buffer(model, dataset, env_id: str, episodes: int) -> dict:
+    """Add the first ceil(episodes / n_envs) * n_envs episodes of ``dataset`` (a
+    MinariDataset of ``env_id``) to ``model``'s replay buffer (and to a new ``demo_buffer`` if
+    the model makes one), env r of the model's n_envs taking the r-th consecutive run of
+    ceil(episodes / n_envs), step by step as a VecEnv hands SB3 its transitions (the
+    episodes of one step across the envs must be equally long); returns ``{"episodes",
+    "env_steps", "success_rate"}``."""
+    from rigid_gym.agents import datasets
+
+    if dataset.env_spec is None or dataset.env_spec.id != env_id:
+        raise ValueError(f"train: demonstrations of {env_id} wanted, dataset {dataset.id} is of "
+                         f"{dataset.env_spec.id if dataset.env_spec else 'no env'}")
     n_envs = model.n_envs
-    env = make_vec_env(env_id, n_envs=n_envs, seed=DEMO_SEED + 1000 * seed)
-    policies = [scripted_policy(e) for e in env.envs]
-    obs = env.reset()
+    per_env = -(-episodes // n_envs)
+    if dataset.total_episodes < per_env * n_envs:
+        raise ValueError(f"train: {episodes} demonstrations over {n_envs} env(s) take "
+                         f"{per_env * n_envs} episodes; dataset {dataset.id} has "
+                         f"{dataset.total_episodes}")
+    streams = [list(dataset.iterate_episodes(range(r * per_env, (r + 1) * per_env)))
+               for r in range(n_envs)]
     buffers = [model.replay_buffer]
     if hasattr(model, "make_demo_buffer"):
         length = gym.spec(env_id).max_episode_steps
         buffers.append(model.make_demo_buffer((episodes + n_envs) * length))
-    finished, successes, steps = 0, 0.0, 0
-    shown = bar(episodes, f"{env_id}: scripted demonstrations", progress)
-    while finished < episodes:
-        actions = np.stack([policy({key: value[i] for key, value in obs.items()})
-                            for i, policy in enumerate(policies)]).astype(np.float32)
-        next_obs, rewards, dones, infos = env.step(actions)
-        stored = {key: value.copy() for key, value in next_obs.items()}
-        for i in np.flatnonzero(dones):  # the VecEnv has reset these; store the true last obs
-            for key in stored:
-                stored[key][i] = infos[i]["terminal_observation"][key]
-            successes += infos[i]["is_success"]
-        for buffer in buffers:
-            buffer.add(obs, stored, model.policy.scale_action(actions), rewards, dones, infos)
-        obs, finished, steps = next_obs, finished + int(dones.sum()), steps + n_envs
-        shown.update(int(dones.sum()))
-    shown.close()
-    env.close()
-    return {"episodes": finished, "env_steps": steps, "success_rate": successes / finished}
+    steps = 0
+    for k in range(per_env):
+        group = [stream[k] for stream in streams]
+        lengths = {len(e) for e in group}
+        if len(lengths) != 1:
+            raise ValueError(f"train: episodes {[int(e.id) for e in group]} of {dataset.id} go "
+                             f"to the envs side by side but differ in length ({sorted(lengths)})")
+        for t in range(lengths.pop()):
+            obs = {key: np.stack([e.observations[key][t] for e in group]) for key in
+                   group[0].observations}
+            next_obs = {key: np.stack([e.observations[key][t + 1] for e in group]) for key in
+                        group[0].observations}
+            actions = np.stack([e.actions[t] for e in group])
+            rewards = np.array([e.rewards[t] for e in group], dtype=np.float32)
+            terminated = np.array([e.terminations[t] for e in group])
+            truncated = np.array([e.truncations[t] for e in group])
+            # what SB3's buffers read of a VecEnv's infos (the timeouts; HER keeps the
+            # dicts only with copy_info_dict)
+            infos = [{"is_success": bool(e.infos["is_success"][t + 1]),
+                      "TimeLimit.truncated": bool(truncated[i] and not terminated[i])}
+                     for i, e in enumerate(group)]
+            for buffer in buffers:
+                buffer.add(obs, next_obs, model.policy.scale_action(actions), rewards,
+                           terminated | truncated, infos)
+            steps += n_envs
+    used = [e for stream in streams for e in stream]
+    return {"episodes": len(used), "env_steps": steps,
+            "success_rate": datasets.success_rate(used)}
 
 
 def _write_run(folder: Path, env_id, algo, seed, timesteps, n_envs, kwargs, demo) -> None:

@@ -6,13 +6,17 @@
     rigid-gym replay FILE [FILE ...]
     rigid-gym train ENV_ID [--algo sac|tqc|ppo] [--steps N] [--seed S] [--n-envs N] [--out DIR]
                     [--eval-freq N] [--eval-episodes N] [--checkpoint-freq N] [--resume]
-                    [--progress-bar]
+                    [--demos N] [--demo-dataset ID] [--progress-bar]
     rigid-gym sweep ENV_ID [ENV_ID ...] --seeds S [S ...] [--param KEY=V1,V2 ...] [--steps N]
                     [--out DIR] [--name NAME] [--eval-freq N] [--eval-episodes N]
                     [--cpus-per-trial C] [--max-failures K]
     rigid-gym sweep --resume EXPERIMENT_DIR
     rigid-gym evaluate MODEL [--env ENV_ID] [--episodes N] [--record DIR]
     rigid-gym report [--out DIR] [--quick] [--no-compare]
+    rigid-gym dataset ENV_ID --dataset-id ID [--policy random|scripted|MODEL.zip] [--episodes N]
+                      [--noise SIGMA] [--seed S]
+    rigid-gym dataset --verify ID
+    rigid-gym dataset --recipes [--episodes N]
 
 ``demo`` runs a few scenes (tumbling bodies of every shape, a ten-cube tower, a bouncing ball,
 a sliding box) and prints each result next to its closed form. ``record`` writes episodes of
@@ -22,6 +26,9 @@ baselines (``rigid_gym.agents``): settings from ``agents/hyperparams.yml``, succ
 seeded episodes; ``sweep`` runs many training runs as Ray Tune trials on the Ray cluster
 that RAY_ADDRESS names (``rigid_gym.agents.sweep``). ``report`` regenerates the accuracy and
 stability report (``rigid_gym.report``: OUT/report.md and OUT/images/report/*.png).
+``dataset`` writes a Minari dataset of an env's episodes (under MINARI_DATASETS_PATH),
+replays one bit for bit (``--verify``) or regenerates the shipped ones
+(``rigid_gym.agents.datasets``).
 """
 
 from __future__ import annotations
@@ -175,7 +182,8 @@ def train(args) -> int:
                           n_envs=args.n_envs, out=args.out, eval_freq=args.eval_freq,
                           eval_episodes=args.eval_episodes,
                           checkpoint_freq=args.checkpoint_freq, progress_bar=args.progress_bar,
-                          demonstrations=args.demos, resume=resume, progress=True)
+                          demonstrations=args.demos, demo_dataset=args.demo_dataset,
+                          resume=resume, progress=True)
     print(f"trained {args.env_id}: {folder / 'model.zip'}")
     if args.eval_freq:
         last = (folder / "evaluations.csv").read_text().strip().splitlines()[-1].split(",")
@@ -214,6 +222,42 @@ def evaluate(args) -> int:
     if args.record:
         return record(result["env_id"], args.model, None, min(args.episodes, 3), 0, args.record,
                       None, False)
+    return 0
+
+
+def dataset(args) -> int:
+    """Write a Minari dataset, verify one (1 if an episode does not replay bit for bit) or
+    regenerate the shipped ones; print what was done."""
+    if importlib.util.find_spec("minari") is None:
+        raise ValueError("dataset needs Minari: pip install 'rigid_gym[datasets]'")
+    from rigid_gym.agents import datasets
+
+    if args.verify:
+        def show(r):
+            print(f"  episode {r.episode} (seed {r.seed}, {r.steps} steps): "
+                  + ("pass" if r.ok else f"FAIL, {r.mismatch}"))
+
+        data = datasets.load(args.verify)
+        print(f"verifying {data.id}: {data.total_episodes} episodes replayed in "
+              f"{data.env_spec.id}, reset with their seeds")
+        results = datasets.verify(data, show)
+        passed = sum(r.ok for r in results)
+        print(f"{passed} of {len(results)} episodes replay bit for bit")
+        return 0 if passed == len(results) else 1
+    if args.recipes:
+        written = datasets.write_recipes(args.episodes or datasets.RECIPE_EPISODES, progress=True)
+    elif args.env_id is None or args.dataset_id is None:
+        raise ValueError("dataset: give ENV_ID and --dataset-id, or --verify ID, or --recipes")
+    else:
+        written = [datasets.write_dataset(args.dataset_id, args.env_id, args.policy,
+                                          args.episodes or 100, args.noise, args.seed,
+                                          progress=True)]
+    for data in written:
+        meta = data.storage.metadata
+        print(f"{data.id}: {data.total_episodes} episodes, {data.total_steps:,} steps of "
+              f"{data.env_spec.id}, policy {meta['policy']}, noise {meta['action_noise']:g}, "
+              f"success {meta['success_rate']:.0%}, {meta['dataset_size']:g} MB in "
+              f"{datasets.datasets_root() / data.id}")
     return 0
 
 
@@ -323,8 +367,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--checkpoint-freq", type=bounded(int, 0, 10**9), default=0,
                    help="env steps between checkpoints (0: none)")
     p.add_argument("--demos", type=bounded(int, 0, 10**6), default=None,
-                   help="scripted episodes put in the replay buffer first (off-policy only; "
+                   help="demonstration episodes put in the replay buffer first (off-policy only; "
                         "default: hyperparams.yml, else 0)")
+    p.add_argument("--demo-dataset", metavar="ID", default=None,
+                   help="the Minari dataset the --demos episodes come from (default: the "
+                        "scripted policy's, written for the run to a temporary folder)")
     p.add_argument("--resume", action="store_true",
                    help="go on from the run's newest checkpoint (see --checkpoint-freq)")
     p.add_argument("--progress-bar", action="store_true",
@@ -369,6 +416,25 @@ def main(argv: list[str] | None = None) -> int:
                    help="a tiny sweep and short stiff runs (seconds), to check the pipeline")
     p.add_argument("--no-compare", action="store_true",
                    help="skip the peer engines (PyBullet) even when installed")
+    p = commands.add_parser("dataset", help="write, verify or regenerate Minari datasets "
+                                            "(MINARI_DATASETS_PATH)")
+    p.add_argument("env_id", nargs="?", type=env_id, default=None, help="e.g. rigid_gym/Push-v0")
+    p.add_argument("--dataset-id", default=None,
+                   help="the dataset's id, e.g. rigid_gym/push/expert-v0")
+    p.add_argument("--policy", type=policy_spec, default="scripted",
+                   help="random, scripted (default) or a stable-baselines3 model .zip")
+    p.add_argument("--episodes", type=bounded(int, 1, 10**6), default=None,
+                   help="episodes, 1 to 1e6 (default 100; with --recipes 200 per dataset)")
+    p.add_argument("--noise", type=bounded(float, 0.0, 10.0), default=0.0,
+                   help="standard deviation of Gaussian noise added to each action, 0 to 10 "
+                        "(the actions then clipped to [-1, 1]; default 0)")
+    p.add_argument("--seed", type=bounded(int, 0, 2**32 - 1), default=0,
+                   help="episode k is reset with seed S + k (default 0)")
+    p.add_argument("--verify", metavar="ID", default=None,
+                   help="replay every episode of dataset ID and compare it bit for bit")
+    p.add_argument("--recipes", action="store_true",
+                   help="regenerate the shipped datasets rigid_gym/{push,stack,throw}/"
+                        "{expert,noisy,random}-v0, replacing them")
     args = parser.parse_args(argv)
     if args.command == "demo":
         return demo(args.steps, args.dt, args.order)
@@ -389,6 +455,8 @@ def main(argv: list[str] | None = None) -> int:
             return sweep(args)
         if args.command == "evaluate":
             return evaluate(args)
+        if args.command == "dataset":
+            return dataset(args)
         return record(args.env_id, args.policy, args.algo, args.episodes, args.seed, args.out,
                       args.run, args.contacts)
     except ValueError as exc:

@@ -200,3 +200,81 @@ def test_sweep_parameters_are_read_as_yaml_lists():
     for bad in ("learning_rate", "=1,2", "tau=", "tau=0.1,,0.2", "tau=[1,"):
         with pytest.raises(ValueError, match="--param"):
             parse_param(bad)
+
+
+def rollout_demonstrations(model, env_id: str, episodes: int, seed: int) -> None:
+    """The reference the dataset path must match: the scripted policy played in a
+    stable-baselines3 VecEnv seeded DEMO_SEED + 1000 * seed, its transitions added to the
+    model's buffers as they come."""
+    from stable_baselines3.common.env_util import make_vec_env
+
+    env = make_vec_env(env_id, n_envs=model.n_envs, seed=DEMO_SEED + 1000 * seed)
+    policies = [scripted_policy(e) for e in env.envs]
+    buffers = [model.replay_buffer]
+    if hasattr(model, "make_demo_buffer"):
+        buffers.append(model.make_demo_buffer((episodes + model.n_envs) * 100))
+    obs, finished = env.reset(), 0
+    while finished < episodes:
+        actions = np.stack([policy({key: value[i] for key, value in obs.items()})
+                            for i, policy in enumerate(policies)]).astype(np.float32)
+        next_obs, rewards, dones, infos = env.step(actions)
+        stored = {key: value.copy() for key, value in next_obs.items()}
+        for i in np.flatnonzero(dones):
+            for key in stored:
+                stored[key][i] = infos[i]["terminal_observation"][key]
+        for buffer in buffers:
+            buffer.add(obs, stored, model.policy.scale_action(actions), rewards, dones, infos)
+        obs, finished = next_obs, finished + int(dones.sum())
+
+
+@pytest.mark.parametrize("n_envs", [1, 2])
+def test_demonstrations_from_the_dataset_are_the_transitions_a_rollout_gives(n_envs):
+    from stable_baselines3 import HerReplayBuffer
+    from stable_baselines3.common.env_util import make_vec_env
+
+    from rigid_gym.agents.bc_sac import BCSAC
+
+    env_id = "rigid_gym/Stack-v0"
+
+    def model():
+        return BCSAC("MultiInputPolicy", make_vec_env(env_id, n_envs=n_envs), buffer_size=1000,
+                     replay_buffer_class=HerReplayBuffer, policy_kwargs={"net_arch": [8]})
+
+    from_dataset, rolled_out = model(), model()
+    demo = add_demonstrations(from_dataset, env_id, episodes=3, seed=4)
+    rollout_demonstrations(rolled_out, env_id, episodes=3, seed=4)
+    assert demo["episodes"] == (3 if n_envs == 1 else 4)  # whole steps of every env
+    assert demo["env_steps"] == 100 * demo["episodes"] and demo["dataset"] is None
+    for name in ("replay_buffer", "demo_buffer"):
+        ours, theirs = getattr(from_dataset, name), getattr(rolled_out, name)
+        assert ours.pos == theirs.pos == 100 * demo["episodes"] // n_envs
+        for key in ("observations", "next_observations"):
+            for field in ours.observations:
+                assert np.array_equal(getattr(ours, key)[field], getattr(theirs, key)[field])
+        for key in ("actions", "rewards", "dones", "timeouts", "ep_start", "ep_length"):
+            assert np.array_equal(getattr(ours, key), getattr(theirs, key)), (name, key)
+
+
+def test_demonstrations_from_a_named_dataset(tmp_path, monkeypatch):
+    from stable_baselines3 import SAC, HerReplayBuffer
+    from stable_baselines3.common.env_util import make_vec_env
+
+    from rigid_gym.agents.datasets import write_dataset
+
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path))
+    write_dataset("rigid_gym/throw/demo-test-v0", "rigid_gym/Throw-v0", "scripted", 3, seed=9)
+    model = SAC("MultiInputPolicy", make_vec_env("rigid_gym/Throw-v0", n_envs=1),
+                buffer_size=1000, replay_buffer_class=HerReplayBuffer,
+                policy_kwargs={"net_arch": [8]})
+    demo = add_demonstrations(model, "rigid_gym/Throw-v0", 2, 0,
+                              dataset="rigid_gym/throw/demo-test-v0")
+    assert demo == {"episodes": 2, "env_steps": 100, "success_rate": 1.0,
+                    "dataset": "rigid_gym/throw/demo-test-v0"}
+    env = gym.make("rigid_gym/Throw-v0")
+    obs, _ = env.reset(seed=10)  # the dataset's second episode
+    assert np.array_equal(model.replay_buffer.observations["observation"][50, 0],
+                          obs["observation"])
+    with pytest.raises(ValueError, match="take 4 episodes; dataset rigid_gym/throw/demo-test-v0 has 3"):
+        add_demonstrations(model, "rigid_gym/Throw-v0", 4, 0, dataset="rigid_gym/throw/demo-test-v0")
+    with pytest.raises(ValueError, match="demonstrations of rigid_gym/Push-v0 wanted"):
+        add_demonstrations(model, "rigid_gym/Push-v0", 1, 0, dataset="rigid_gym/throw/demo-test-v0")
