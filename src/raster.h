@@ -12,7 +12,8 @@
 // Per-pixel buffers (H, W): `nearness` (larger = nearer; 1/depth with depth in m for the
 // camera, 0 = empty), `ids` (triangle index, -1 = empty) and `diffuse` (the Lambert factor
 // max(0, n . light) in [0, 1], interpolated perspective-correctly).
-// The shadow map uses the same buffers and fill, seen orthographically along the light.
+// The shadow map uses the same fill into a nearness buffer alone, seen orthographically along
+// the light.
 //
 // Indices (owner, ids, the triangle ranges) must be in range: the bindings check them.
 #pragma once
@@ -62,16 +63,16 @@ void rasterize(Span<const Vec3> world, Span<const Vec3> world_normal, int64_t fi
                int64_t last, Vec3 eye, const Mat3& axes, double focal, double near, Vec3 light,
                const DepthBuffers& out);
 
-// Draw the faces of triangles [0, count) that face away from the light into an orthographic
-// shadow map.
+// Draw the faces of triangles [first, last) that face away from the light into an
+// orthographic shadow map of nearness alone.
 //
 // light_axes: rows u, v (the map's x and y) and the unit vector towards the light; origin: m,
 // the map's corner in (u, v) and the light coordinate at which nearness is 0; texel: m per
 // texel. Nearness is the height along the light above origin.z. Using only the faces turned
 // away from the light (the far side of each closed body) keeps lit surfaces from shadowing
 // themselves.
-void shadow_map(Span<const Vec3> world, int64_t count, const Mat3& light_axes, Vec3 origin,
-                double texel, const DepthBuffers& out);
+void shadow_map(Span<const Vec3> world, int64_t first, int64_t last, const Mat3& light_axes,
+                Vec3 origin, double texel, Pixels<double> nearness);
 
 // Colour every pixel into `image` (H, W).
 //
