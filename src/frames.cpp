@@ -57,6 +57,7 @@ FrameRenderer::Scratch FrameRenderer::make_scratch() const {
     s.base_nearness.assign(pixels, 0.0);
     s.base_diffuse.assign(pixels, 0.0);
     s.base_ids.assign(pixels, -1);
+    s.ray_x.assign(width_, 0.0);
     const int64_t background = static_cast<int64_t>(background_instances_.size());
     s.base_rotation.assign(background, Mat3{});
     s.base_translation.assign(background, Vec3{});
@@ -222,7 +223,7 @@ void FrameRenderer::draw(const FramePoses& poses, int64_t copy, const FrameView&
           readable(s.diffuse, height_, width_), readable(s.layer_ids, height_, width_),
           readable(s.layer_diffuse, height_, width_), mesh.colors.span(), mesh.alpha.span(),
           view.focal, to_light, light_offset, texel, shadow, view.ambient, view.background,
-          image);
+          image, s.ray_x.span());
 }
 
 }  // namespace rg

@@ -95,6 +95,7 @@ private:
         Array<Vec3> world, world_normal;
         Array<double> nearness, diffuse, layer_nearness, layer_diffuse, shadow;
         Array<int32_t> ids, layer_ids;
+        Array<double> ray_x;  // (W,) shade's scratch
         Array<double> base_nearness, base_diffuse;
         Array<int32_t> base_ids;
         bool base_drawn = false;

@@ -267,9 +267,13 @@ void shade(Pixels<const double> nearness, Pixels<const int32_t> ids,
            Pixels<const double> diffuse, Pixels<const int32_t> layer_ids,
            Pixels<const double> layer_diffuse, Span<const Vec3> color, Span<const double> alpha,
            double focal, const Mat3& to_light, Vec3 light_offset, double texel,
-           Pixels<const double> shadow, double ambient, Vec3 background, Pixels<Rgb8> image) {
+           Pixels<const double> shadow, double ambient, Vec3 background, Pixels<Rgb8> image,
+           Span<double> ray_x) {
     const int64_t height = ids.rows, width = ids.columns;
     const double cx = 0.5 * width, cy = 0.5 * height;
+    for (int64_t j = 0; j < width; ++j) {
+        ray_x[j] = (j + 0.5 - cx) / focal;
+    }
     for (int64_t i = 0; i < height; ++i) {
         const double y = (cy - i - 0.5) / focal;
         for (int64_t j = 0; j < width; ++j) {
@@ -278,7 +282,7 @@ void shade(Pixels<const double> nearness, Pixels<const int32_t> ids,
             if (t >= 0) {
                 double lit = diffuse(i, j);
                 if (lit > 0.0 && shadow.rows > 0) {
-                    const Vec3 ray = {(j + 0.5 - cx) / focal, y, 1.0};
+                    const Vec3 ray = {ray_x[j], y, 1.0};
                     const double depth = 1.0 / nearness(i, j);
                     const double u = light_offset.x + depth * dot_row(to_light, 0, ray);
                     const double v = light_offset.y + depth * dot_row(to_light, 1, ray);

@@ -87,11 +87,12 @@ void shadow_map(Span<const Vec3> world, int64_t first, int64_t last, const Mat3&
 // `texel` (m) nearer the light than the point to shadow it. The map holds only the far sides
 // of bodies, which lie behind any lit surface of the same body, so this small bias suffices:
 // a body shadows its own lit side only near its terminator, where the diffuse light is weak
-// anyway.
+// anyway. ray_x (W,) is scratch: each column's x on the view plane, made once per frame.
 void shade(Pixels<const double> nearness, Pixels<const int32_t> ids,
            Pixels<const double> diffuse, Pixels<const int32_t> layer_ids,
            Pixels<const double> layer_diffuse, Span<const Vec3> color, Span<const double> alpha,
            double focal, const Mat3& to_light, Vec3 light_offset, double texel,
-           Pixels<const double> shadow, double ambient, Vec3 background, Pixels<Rgb8> image);
+           Pixels<const double> shadow, double ambient, Vec3 background, Pixels<Rgb8> image,
+           Span<double> ray_x);
 
 }  // namespace rg
