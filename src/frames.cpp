@@ -176,9 +176,11 @@ void FrameRenderer::draw(const FramePoses& poses, int64_t copy, const FrameView&
                                   1e-9),
                          finest);
         origin = {low.x - 2.0 * texel, low.y - 2.0 * texel, low.z - 1.0};
-        // texels that the casters' span needs, two to spare on each side (at most the side)
+        // texels that the casters' span needs, two to spare on each side, at most the side
+        // (min's order sends a NaN span, from non-finite poses, to the side)
         const auto needed = [&](double span) {
-            return std::min(shadow_side_, static_cast<int64_t>(std::ceil(span / texel)) + 4);
+            return static_cast<int64_t>(
+                std::min(static_cast<double>(shadow_side_), std::ceil(span / texel) + 4.0));
         };
         const int64_t columns = needed(high.x - low.x), rows = needed(high.y - low.y);
         std::fill(s.shadow.data(), s.shadow.data() + rows * columns, 0.0);
