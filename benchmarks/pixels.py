@@ -16,8 +16,12 @@ speed moves both sides of a comparison.
    that a pixel agent needs (PyBullet's CPU renderer), when panda-gym is installed
    (``pip install -e ".[compare]"``).
 
+4. With ``--frames FOLDER``: each task's 84 x 84 ``pixels`` observation (front camera) after
+   FRAME_STEPS steps of its scripted policy from reset(seed=1), as FOLDER/pixels_<task>.png.
+
     python benchmarks/pixels.py                  # about 2 minutes on 2 cores
     python benchmarks/pixels.py --repeats 9      # more rounds per median (default 5)
+    python benchmarks/pixels.py --frames docs/images --repeats 0   # the pictures only
 """
 
 import argparse
@@ -36,6 +40,8 @@ SIZE = 84
 TASKS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
 BATCH_SIZES = (16, 64)
 PANDA_PUSH = "PandaPush-v3"
+FRAME_STEPS = {"rigid_gym/Push-v0": 12, "rigid_gym/Stack-v0": 25, "rigid_gym/Throw-v0": 8}
+"""Scripted steps before each task's picture: the pad at work on a cube."""
 
 
 def load_benchmark(name: str):
@@ -107,6 +113,24 @@ def panda_maker():
                             render_height=SIZE)
 
 
+def save_frames(folder: Path) -> None:
+    """Write each task's pixels observation after FRAME_STEPS scripted steps (seed 1)."""
+    import matplotlib.pyplot as plt
+
+    from rigid_gym.envs.scripted import scripted_policy
+
+    folder.mkdir(parents=True, exist_ok=True)
+    for env_id in TASKS:
+        env = gym.make(env_id, obs_mode="state+pixels", width=SIZE, height=SIZE)
+        policy = scripted_policy(env)
+        obs, _ = env.reset(seed=1)
+        for _ in range(FRAME_STEPS[env_id]):
+            obs = env.step(policy(obs))[0]
+        path = folder / f"pixels_{env_id.split('/')[1].split('-')[0].lower()}.png"
+        plt.imsave(path, obs["pixels"])
+        print(f"wrote {path}")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
@@ -116,7 +140,12 @@ def main():
                         help="env steps of each vector env per round (B x vector steps)")
     parser.add_argument("--panda-steps", type=int, default=30,
                         help="steps of PandaPush-v3 per round")
+    parser.add_argument("--frames", type=Path, help="folder for each task's picture")
     args = parser.parse_args()
+    if args.frames is not None:
+        save_frames(args.frames)
+    if args.repeats < 1:
+        return
 
     print(SPEED.machine_line())
     runs = {}
