@@ -16,7 +16,10 @@ speed moves both sides of a comparison.
    that a pixel agent needs (PyBullet's CPU renderer), when panda-gym is installed
    (``pip install -e ".[compare]"``).
 
-4. With ``--frames FOLDER``: each task's 84 x 84 ``pixels`` observation (front camera) after
+4. CPU time of one 84 x 84 frame (``time.process_time``, the median of ``--repeats``
+   timings of 1,000 frames of a state after a few random steps): what a frame costs whatever
+   else the machine runs.
+5. With ``--frames FOLDER``: each task's 84 x 84 ``pixels`` observation (front camera) after
    FRAME_STEPS steps of its scripted policy from reset(seed=1), as FOLDER/pixels_<task>.png.
 
     python benchmarks/pixels.py                  # about 2 minutes on 2 cores
@@ -113,6 +116,23 @@ def panda_maker():
                             render_height=SIZE)
 
 
+def frame_cpu_microseconds(env_id: str, repeats: int, frames: int = 1000) -> float:
+    """Median over ``repeats`` timings of the CPU time of one pixels frame, us."""
+    env = gym.make(env_id, obs_mode="pixels", width=SIZE, height=SIZE)
+    env.reset(seed=0)
+    for _ in range(5):
+        env.step(env.action_space.sample())
+    core = env.unwrapped.core
+    state, world = core.world.state, np.zeros(1, dtype=np.int64)
+    times = []
+    for _ in range(repeats):
+        start = time.process_time()
+        for _ in range(frames):
+            core.frames.draw(state, world)
+        times.append((time.process_time() - start) / frames)
+    return 1e6 * statistics.median(times)
+
+
 def save_frames(folder: Path) -> None:
     """Write each task's pixels observation after FRAME_STEPS scripted steps (seed 1)."""
     import matplotlib.pyplot as plt
@@ -175,6 +195,13 @@ def main():
     if panda_rates:
         print(f"| {PANDA_PUSH} (panda-gym, PyBullet), render() {SIZE} x {SIZE} | | gym.make | "
               f"{statistics.median(panda_rates):,.1f} | 1.00x |")
+
+    print(f"\nCPU time of one {SIZE} x {SIZE} frame (median of {args.repeats} timings of "
+          "1,000 frames)\n")
+    print("| env | us per frame |")
+    print("|---|---|")
+    for env_id in TASKS:
+        print(f"| {env_id} | {frame_cpu_microseconds(env_id, args.repeats):.0f} |")
 
 
 if __name__ == "__main__":
