@@ -192,8 +192,7 @@ class RigidGymEnv(gym.Env):
         return self.renderer.render(self.world.position, self.world.orientation)
 
 
-def task_spaces(task: Task, pixels: PixelOptions = PixelOptions()) -> tuple[spaces.Dict,
-                                                                           spaces.Box]:
+def task_spaces(task: Task, pixels: PixelOptions) -> tuple[spaces.Dict, spaces.Box]:
     """The observation and action spaces of one copy of ``task`` observed as ``pixels``
     says (its obs_mode and frame size)."""
     size = 6 + int(task.has_grip) + OBJECT_FEATURES * task.num_cubes

@@ -5,6 +5,7 @@ import itertools
 import subprocess
 import sys
 import warnings
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -13,8 +14,11 @@ from gymnasium.utils.env_checker import check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import rigid_gym
+from pixel_digest import frame_digest
 from rigid_gym.envs.pixels import CAMERA_NAMES, CAMERAS, OBS_MODES, VIEWED
 from rigid_gym.render import Camera
+
+HERE = Path(__file__).parent
 
 TASK_IDS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
 MODE_KEYS = {"state": {"observation", "achieved_goal", "desired_goal"},
@@ -87,31 +91,14 @@ def test_the_autoreset_step_shows_the_new_episode_and_keeps_the_last_frame():
     np.testing.assert_array_equal(obs["pixels"][0], single.reset()[0]["pixels"])
 
 
-DIGEST = """
-import hashlib
-import gymnasium as gym
-import numpy as np
-import rigid_gym
-
-def frame_digest(env_id, num_envs, steps):
-    envs = gym.make_vec(env_id, num_envs=num_envs, obs_mode="pixels")
-    digest = hashlib.sha256(envs.reset(seed=7)[0]["pixels"].tobytes())
-    actions = np.random.default_rng(1).uniform(-1, 1, (steps,) + envs.action_space.shape)
-    for a in actions:
-        digest.update(envs.step(a)[0]["pixels"].tobytes())
-    return digest.hexdigest()
-"""
-"""frame_digest: sha256 of every frame of make_vec(env_id, num_envs) over seeded random
-steps; defined here and in the fresh processes (which need not import this module's SB3)."""
-exec(DIGEST)
-
-
 def test_the_same_seed_gives_the_same_bytes_in_other_processes_and_thread_counts():
     """A batch of 5 Throw copies drawn on 1 and on 3 threads in fresh processes (the copies
     shared out differently) gives every frame's bytes as this process does."""
-    here = frame_digest("rigid_gym/Throw-v0", 5, 20)  # noqa: F821 (defined by DIGEST)
+    here = frame_digest("rigid_gym/Throw-v0", 5, 20)
     for threads in (1, 3):
-        script = (f"from rigid_gym import _core\n_core.set_num_threads({threads})\n{DIGEST}"
+        script = (f"import sys; sys.path.insert(0, {str(HERE)!r})\n"
+                  f"from rigid_gym import _core; _core.set_num_threads({threads})\n"
+                  "from pixel_digest import frame_digest\n"
                   "print(frame_digest('rigid_gym/Throw-v0', 5, 20))")
         out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                              check=True)
@@ -217,8 +204,8 @@ def test_rgb_array_frames_are_unchanged_by_the_obs_mode():
     ({"obs_mode": "pixels", "width": 84.0}, r"width must be an int .* got 84.0"),
     ({"obs_mode": "pixels", "width": True}, r"width must be an int"),
     ({"obs_mode": "pixels", "camera": "wrist"},
-     r"camera must be one of \['front', 'top', 'side'\] or a rigid_gym.render.Camera, "
-     r"got 'wrist'"),
+     (r"camera must be one of \['front', 'top', 'side'\] or a rigid_gym.render.Camera, "
+      r"got 'wrist'")),
     ({"obs_mode": "pixels", "goal_marker": "no"}, r"goal_marker must be a bool"),
 ])
 def test_bad_arguments_are_refused_before_anything_steps(kwargs, message):
@@ -232,10 +219,9 @@ def test_sb3_trains_on_pixels_with_its_cnn():
     """SB3's MultiInputPolicy puts its NatureCNN on ``pixels``: PPO on the batched env and SAC
     with HER (relabelling the goal vectors) on the single env train a few hundred steps."""
     import torch
+    from rigid_gym.agents.vec_env import SB3VecEnv
     from stable_baselines3 import PPO, SAC, HerReplayBuffer
     from stable_baselines3.common.torch_layers import NatureCNN
-
-    from rigid_gym.agents.vec_env import SB3VecEnv
 
     torch.set_num_threads(1)
     venv = SB3VecEnv(gym.make_vec("rigid_gym/PushDense-v0", num_envs=4, obs_mode="pixels"))
