@@ -264,7 +264,8 @@ class Renderer:
         ``World.state.rotation`` and ``World.state.position``); marker_position (B, m, 3), m:
         each copy's markers (their orientations are the renderer's, ``set_marker``). Returns
         ``out`` (k, height, width, 3) uint8 (a new array when None), image k of copy
-        ``worlds[k]``; the same bytes as ``render`` gives each copy alone. Every argument must
+        ``worlds[k]``, whose bytes depend on nothing else: not on the other copies, nor on the
+        thread that drew it. Every argument must
         be a C-contiguous float64 (int64 for worlds, uint8 for out) array of these shapes: the
         core checks shapes, types and indices (TypeError, ValueError), not finiteness (a
         non-finite pose draws garbage, never out of bounds).
