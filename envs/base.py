@@ -24,6 +24,7 @@ from gymnasium.error import ResetNeeded
 from rigid_gym.recordable import Series
 from rigid_gym.envs.core import ALL, TaskBatch
 from rigid_gym.envs.options import ARGUMENTS_TABLE, Options, checked_actions
+from rigid_gym.envs.pixels import DEFAULT_SIZE, PixelOptions
 from rigid_gym.envs.task import OBJECT_FEATURES, STEP_TIME, Task
 
 ACTION_NAMES = ("x", "y", "z", "grip")
@@ -48,12 +49,15 @@ class RigidGymEnv(gym.Env):
 
     def __init__(self, render_mode: str | None = None, reward_type: str = "sparse",
                  terminate_on_success: bool = False, randomize: bool | dict = False,
-                 observation_noise: float = 0.0):
+                 observation_noise: float = 0.0, obs_mode: str = "state",
+                 width: int = DEFAULT_SIZE, height: int = DEFAULT_SIZE, camera="front",
+                 goal_marker: bool = True):
         name = type(self).__name__
         self.options = Options.checked(name, render_mode, reward_type, terminate_on_success,
-                                       randomize, observation_noise)
+                                       randomize, observation_noise, obs_mode, width, height,
+                                       camera, goal_marker)
         self.render_mode = render_mode
-        self.observation_space, self.action_space = task_spaces(self.task)
+        self.observation_space, self.action_space = task_spaces(self.task, self.options.pixels)
         size = self.action_space.shape[0]
         self.scalar_series = (REWARD_SERIES, Series("action", ACTION_NAMES[:size],
                                                     ACTION_COLORS[:size]), SUCCESS_SERIES)
@@ -188,16 +192,18 @@ class RigidGymEnv(gym.Env):
         return self.renderer.render(self.world.position, self.world.orientation)
 
 
-def task_spaces(task: Task) -> tuple[spaces.Dict, spaces.Box]:
-    """The observation and action spaces of one copy of ``task``."""
+def task_spaces(task: Task, pixels: PixelOptions) -> tuple[spaces.Dict, spaces.Box]:
+    """The observation and action spaces of one copy of ``task`` observed as ``pixels``
+    says (its obs_mode and frame size)."""
     size = 6 + int(task.has_grip) + OBJECT_FEATURES * task.num_cubes
     vector = lambda n: spaces.Box(-np.inf, np.inf, shape=(n,), dtype=np.float32)  # noqa: E731
-    observation = spaces.Dict({
-        "observation": vector(size),
-        "achieved_goal": vector(task.goal_size),
-        "desired_goal": vector(task.goal_size),
-    })
-    return observation, spaces.Box(-1.0, 1.0, shape=(3 + int(task.has_grip),), dtype=np.float32)
+    keys = {"achieved_goal": vector(task.goal_size), "desired_goal": vector(task.goal_size)}
+    if pixels.state:
+        keys["observation"] = vector(size)
+    if pixels.pixels:
+        keys["pixels"] = pixels.space()
+    return spaces.Dict(keys), spaces.Box(-1.0, 1.0, shape=(3 + int(task.has_grip),),
+                                         dtype=np.float32)
 
 
 def single(observations: dict) -> dict:

@@ -26,6 +26,7 @@ from rigid_gym.shapes import Box
 from rigid_gym.world import World
 from rigid_gym.envs.effector import SuctionGripper, Workspace
 from rigid_gym.envs.options import Options
+from rigid_gym.envs.pixels import CopyFrames
 from rigid_gym.envs.task import (CUBE_HALF, CUBE_MASS, FRICTION, GRIPPER_START, OBJECT_FEATURES,
                                  ROTATION_FEATURES, SOLVER_STEPS, STEP_TIME, Task)
 
@@ -79,6 +80,7 @@ class TaskBatch:
         self.cubes: list[int] = []
         self.fixtures: list[int] = []
         self.table = self.gripper_body = -1
+        self.frames: CopyFrames | None = None  # the copies' pixels, when observed
         # how observe reads the World's state (made with the World: observation_index), and
         # where the achieved goal (the cubes' positions) lies in an observation
         empty = np.zeros(0, dtype=np.int64)
@@ -113,6 +115,9 @@ class TaskBatch:
             len(scene.bodies), self.gripper_body, self.cubes, self.task.has_grip)
         self.achieved_columns = np.array([first_cube + OBJECT_FEATURES * j + i
                                           for j in range(len(self.cubes)) for i in range(3)])
+        if self.options.pixels.pixels:
+            self.frames = CopyFrames(scene, self.task, half, self.options.pixels,
+                                     self.num_worlds)
 
     # -- episodes ---------------------------------------------------------------------------
 
@@ -141,6 +146,8 @@ class TaskBatch:
         self.goals[copies] = goals
         self.desired[copies] = goals
         self.desired64[copies] = self.desired[copies]
+        if self.frames is not None:
+            self.frames.place(rows, goals, half)
         return self.observe(copies)
 
     def write(self, copies, rows: np.ndarray, starts: np.ndarray, places: np.ndarray,
@@ -191,7 +198,9 @@ class TaskBatch:
         orientation (ROTATION_FEATURES), velocity (3) and angular velocity (3); achieved_goal:
         the cubes' positions. Computed in float64, checked finite, noise added, then cast to
         float32; the goal test and the reward read the float32 goals, exactly as
-        ``compute_reward`` sees them."""
+        ``compute_reward`` sees them. With pixels (``obs_mode``), ``pixels`` holds the
+        copies' frames (k, height, width, 3) uint8, and "pixels" mode leaves out
+        ``observation``."""
         worlds = self.all_worlds[copies]
         s = self.world.state
         vectors = np.empty((len(worlds), len(self.gather)))
@@ -216,6 +225,10 @@ class TaskBatch:
             rewards = self.task.reward(achieved64, desired64, "dense")
         observations = {"observation": vectors.astype(np.float32), "achieved_goal": achieved,
                         "desired_goal": self.desired[copies].copy()}
+        if self.frames is not None:
+            observations["pixels"] = self.frames.draw(s, worlds)
+            if not self.options.pixels.state:
+                del observations["observation"]
         terminated = successes.copy() if self.options.terminate_on_success \
             else np.zeros(len(worlds), dtype=bool)
         return Outcome(observations, rewards, successes, terminated)

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from rigid_gym.envs.pixels import DEFAULT_SIZE, PixelOptions
+
 RENDER_MODES = ("rgb_array", "human")
 RANDOMIZATION = {
     "mass": (0.5, 2.0),
@@ -27,7 +29,11 @@ ARGUMENTS_TABLE = """| argument | default | meaning |
     | reward_type | "sparse" | "sparse" or "dense" (the ``Dense`` ids) |
     | terminate_on_success | False | end the episode when the goal is reached |
     | randomize | False | True, or a dict of ranges, to redraw cube mass, size, restitution and friction each reset (``rigid_gym.envs.options.RANDOMIZATION``) |
-    | observation_noise | 0.0 | standard deviation of Gaussian noise on ``observation`` |"""
+    | observation_noise | 0.0 | standard deviation of Gaussian noise on ``observation`` |
+    | obs_mode | "state" | "state", "pixels" (``pixels`` (height, width, 3) uint8 and the goals) or "state+pixels" (``rigid_gym.envs.pixels``) |
+    | width, height | 84 | frame size of ``pixels``, in [16, 1024] pixels |
+    | camera | "front" | the frame's camera: "front", "top", "side" (``rigid_gym.envs.pixels.CAMERAS``) or a ``rigid_gym.render.Camera`` |
+    | goal_marker | True | draw the goal marker in ``pixels`` |"""
 """The constructor arguments every task shares, as its docstring's "Arguments" table."""
 
 
@@ -35,19 +41,23 @@ ARGUMENTS_TABLE = """| argument | default | meaning |
 class Options:
     """A task's arguments, checked (``Options.checked``): render_mode (None or one of
     RENDER_MODES), reward_type ("sparse" or "dense"), terminate_on_success,
-    randomization ({name: (low, high)}, the ranges in use: ``randomize`` resolved) and
-    observation_noise (standard deviation, >= 0)."""
+    randomization ({name: (low, high)}, the ranges in use: ``randomize`` resolved),
+    observation_noise (standard deviation, >= 0) and pixels (obs_mode and the frames'
+    settings, ``rigid_gym.envs.pixels.PixelOptions``)."""
 
     render_mode: str | None
     reward_type: str
     terminate_on_success: bool
     randomization: dict
     observation_noise: float
+    pixels: PixelOptions
 
     @classmethod
     def checked(cls, where: str, render_mode: str | None = None, reward_type: str = "sparse",
                 terminate_on_success: bool = False, randomize: bool | dict = False,
-                observation_noise: float = 0.0) -> Options:
+                observation_noise: float = 0.0, obs_mode: str = "state",
+                width: int = DEFAULT_SIZE, height: int = DEFAULT_SIZE, camera="front",
+                goal_marker: bool = True) -> Options:
         """The arguments of ARGUMENTS_TABLE, or a ValueError that starts with ``where``
         (the env class's name)."""
         if render_mode is not None and render_mode not in RENDER_MODES:
@@ -64,7 +74,8 @@ class Options:
             raise ValueError(f"{where}: observation_noise must be a finite standard "
                              f"deviation >= 0, got {observation_noise!r}")
         return cls(render_mode, reward_type, terminate_on_success,
-                   randomization_ranges(randomize, where), noise)
+                   randomization_ranges(randomize, where), noise,
+                   PixelOptions.checked(where, obs_mode, width, height, camera, goal_marker))
 
 
 def randomization_ranges(randomize, where: str) -> dict:

@@ -63,7 +63,8 @@ class RigidGymVectorEnv(VectorEnv):
         self.core.build(np.full(task.num_cubes, CUBE_HALF))
         self.num_envs = int(num_envs)
         self.max_episode_steps = int(max_episode_steps)
-        self.single_observation_space, self.single_action_space = task_spaces(task)
+        self.single_observation_space, self.single_action_space = task_spaces(
+            task, self.options.pixels)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.elapsed = np.zeros(self.num_envs, dtype=np.int64)

@@ -6,11 +6,12 @@
 
 Every shape is tessellated once into a closed triangle mesh in its shape frame (a Plane into a
 finite, tiled square patch: a table top); each frame moves the triangles with the body poses
-and draws them with a z-buffer (the core's ``src/raster.cpp``): a perspective camera, back-face
-culling, Gouraud-interpolated Lambert shading from one directional light plus ambient, and the
-bodies' shadows from an orthographic shadow map. Translucent markers (alpha < 1) are blended
-over the opaque scene, nearest one per pixel. Output is deterministic: the same input gives the
-same bytes.
+and draws them with a z-buffer (the core's ``src/frames.h`` over ``src/raster.cpp``): a
+perspective camera, back-face culling, Gouraud-interpolated Lambert shading from one
+directional light plus ambient, and the bodies' shadows from an orthographic shadow map.
+Translucent markers (alpha < 1) are blended over the opaque scene, nearest one per pixel.
+``render_batch`` draws many worlds of the scene (a batched World's copies) in one call on the
+core's threads. Output is deterministic: the same input gives the same bytes, on any thread.
 """
 
 from __future__ import annotations
@@ -55,7 +56,10 @@ DYNAMIC_PALETTE = (
 """Dynamic bodies, in order of appearance, cycled."""
 MARKER_COLOR = (0.20, 0.85, 0.35)
 SHADOW_RESOLUTION = 512
-"""Texels along each side of the shadow map, which spans the bodies (not the planes)."""
+"""Most texels along each side of the shadow map, which spans the bodies (not the planes). A
+frame's map has twice the frame's larger side, up to this (168 at 84 x 84): its texels stay
+finer than the frame's pixels wherever the bodies fill less than the whole view, and a small
+frame does not pay for a large map."""
 NEAR = 1e-3
 """Distance from the eye to the near clipping plane, m."""
 
@@ -165,7 +169,7 @@ class Renderer:
                 f"Renderer.scene: expected a rigid_gym.Scene, got {type(scene).__name__}")
         self.width = _size(width, "Renderer.width")
         self.height = _size(height, "Renderer.height")
-        self.camera = Camera() if camera is None else camera
+        self._camera = _camera(Camera() if camera is None else camera)
         light = vector(light_direction, 3, "Renderer.light_direction")
         if not np.linalg.norm(light) > 0.0:
             raise ValueError("Renderer.light_direction: must be nonzero, got [0, 0, 0]")
@@ -174,15 +178,11 @@ class Renderer:
         colours = body_colors(scene, colors)
         half = positive(plane_half_size, "Renderer.plane_half_size")
         self._parts = [_body_part(b, colours[b.index], half) for b in scene.bodies]
-        self._rotation = np.tile(np.eye(3), (self.num_bodies, 1, 1))  # (N, 3, 3) per instance:
-        self._translation = np.zeros((self.num_bodies, 3))  # bodies, then markers; m
+        self._marker_rotation = np.zeros((0, 3, 3))  # (m, 3, 3) each marker's orientation
+        self._marker_position = np.zeros((0, 3))  # (m, 3) m
+        self.shadow_side = shadow_side(self.width, self.height) if shadows else 0
+        """Texels along each side of the shadow map (0: no shadows)."""
         self._pack()
-        shape = (self.height, self.width)
-        self._buffers = [(np.zeros(shape), np.full(shape, -1, np.int32), np.zeros(shape))
-                         for _ in range(2)]  # opaque surface, translucent layer
-        side = SHADOW_RESOLUTION if shadows else 0  # an empty map: no shadows
-        self._shadow = (np.zeros((side, side)), np.full((side, side), -1, np.int32),
-                        np.zeros((side, side)))
 
     @property
     def camera(self) -> Camera:
@@ -190,9 +190,12 @@ class Renderer:
 
     @camera.setter
     def camera(self, camera: Camera) -> None:
-        if not isinstance(camera, Camera):
-            raise ValueError(f"Renderer.camera: expected a Camera, got {type(camera).__name__}")
-        self._camera = camera
+        self._camera = _camera(camera)
+        self._set_view()
+
+    @property
+    def num_markers(self) -> int:
+        return len(self._marker_position)
 
     # -- markers -------------------------------------------------------------------------------
 
@@ -219,8 +222,8 @@ class Renderer:
         corners, normals = vertices[triangles].reshape(-1, 3), corner_normals(vertices, triangles)
         kind = _OPAQUE if alpha == 1.0 else _TRANSLUCENT
         self._parts.append(_Part(corners, normals, np.tile(rgb, (len(triangles), 1)), alpha, kind))
-        self._rotation = np.concatenate([self._rotation, np.eye(3)[None]])
-        self._translation = np.concatenate([self._translation, np.zeros((1, 3))])
+        self._marker_rotation = np.concatenate([self._marker_rotation, np.eye(3)[None]])
+        self._marker_position = np.concatenate([self._marker_position, np.zeros((1, 3))])
         self._pack()
         self.set_marker(index, position, orientation)
         return index
@@ -228,13 +231,12 @@ class Renderer:
     def set_marker(self, index: int, position, orientation=None) -> None:
         """Move marker ``index``: ``position`` (3,) m, optional ``orientation`` (4,) unit
         quaternion (w, x, y, z) of its shape frame (kept when None)."""
-        count = len(self._parts) - self.num_bodies
-        instance = self.num_bodies + _index(index, count, "Renderer.set_marker.index", "markers")
-        self._translation[instance] = vector(position, 3, "Renderer.set_marker.position")
+        marker = _index(index, self.num_markers, "Renderer.set_marker.index", "markers")
+        self._marker_position[marker] = vector(position, 3, "Renderer.set_marker.position")
         if orientation is not None:
             q = vector(orientation, 4, "Renderer.set_marker.orientation")
             quat.check_unit(q, "Renderer.set_marker.orientation")
-            self._rotation[instance] = quat.to_matrix(quat.normalize(q))
+            self._marker_rotation[marker] = quat.to_matrix(quat.normalize(q))
 
     # -- drawing -------------------------------------------------------------------------------
 
@@ -246,80 +248,70 @@ class Renderer:
         x = finite_array(position, (n, 3), "Renderer.render.position")
         q = finite_array(orientation, (n, 4), "Renderer.render.orientation")
         quat.check_unit(q, "Renderer.render.orientation")
-        self._rotation[:n] = quat.to_matrix(q)
-        self._translation[:n] = x
-        p = self._packed
-        _core.raster_transform(p.corners, p.normals, p.owner, self._rotation,
-                               self._translation, p.world, p.world_normal)
-        light_axes, origin, texel = self._draw_shadow_map()
-        camera = self.camera
-        eye, axes, focal = camera.eye, camera.axes(), camera.focal(self.height)
-        (nearness, ids, diffuse), (layer_nearness, layer_ids, layer_diffuse) = self._buffers
-        nearness.fill(0.0)
-        ids.fill(-1)
-        _core.rasterize(p.world, p.world_normal, 0, p.num_opaque, eye, axes, focal, NEAR,
-                        self.light, nearness, ids, diffuse)
-        layer_ids.fill(-1)
-        if p.num_opaque < p.num_triangles:
-            layer_nearness[...] = nearness
-            _core.rasterize(p.world, p.world_normal, p.num_opaque, p.num_triangles, eye, axes,
-                            focal, NEAR, self.light, layer_nearness, layer_ids, layer_diffuse)
-        # shadow-map coordinates of eye + depth * axes.T @ (x, y, 1): texels, texels, m
-        scale = np.array([1.0 / texel, 1.0 / texel, 1.0])[:, None]
-        to_light = scale * (light_axes @ axes.T)
-        light_offset = scale[:, 0] * (light_axes @ eye - origin)
-        image = np.empty((self.height, self.width, 3), np.uint8)
-        _core.shade(nearness, ids, diffuse, layer_ids, layer_diffuse, p.colors, p.alpha, focal,
-                    to_light, light_offset, texel, self._shadow[0], AMBIENT,
-                    np.array(BACKGROUND), image)
-        return image
+        rotation = np.ascontiguousarray(quat.to_matrix(q), dtype=np.float64)
+        image = np.empty((1, self.height, self.width, 3), np.uint8)
+        self._frames.render(rotation[None], np.ascontiguousarray(x)[None], self._marker_rotation,
+                            self._marker_position[None], _FIRST_WORLD, image)
+        return image[0]
 
-    def _draw_shadow_map(self) -> tuple[np.ndarray, np.ndarray, float]:
-        """Fill the shadow map with the bodies' far sides seen from the light.
+    def render_batch(self, rotation: np.ndarray, position: np.ndarray,
+                     marker_position: np.ndarray, worlds: np.ndarray,
+                     out: np.ndarray | None = None) -> np.ndarray:
+        """The pictures of copies ``worlds`` (k,) int64 of B worlds of this scene, in one call
+        shared out over the core's threads (``rigid_gym._core.num_threads``).
 
-        Returns the light axes (3, 3) (rows u, v, towards the light), the map's origin (3,) m
-        and its texel size, m; the map spans the bodies' extent across the light.
+        rotation (B, n, 3, 3) and position (B, n, 3), m: the copies' body frames (as
+        ``World.state.rotation`` and ``World.state.position``); marker_position (B, m, 3), m:
+        each copy's markers (their orientations are the renderer's, ``set_marker``). Returns
+        ``out`` (k, height, width, 3) uint8 (a new array when None), image k of copy
+        ``worlds[k]``, whose bytes depend on nothing else: not on the other copies, nor on the
+        thread that drew it. Every argument must
+        be a C-contiguous float64 (int64 for worlds, uint8 for out) array of these shapes: the
+        core checks shapes, types and indices (TypeError, ValueError), not finiteness (a
+        non-finite pose draws garbage, never out of bounds).
         """
-        light_axes = _light_axes(self.light)
-        p = self._packed
-        shadow = self._shadow[0]
-        if shadow.shape[0] == 0 or p.num_casters == 0:
-            return light_axes, np.zeros(3), 1.0
-        coordinates = p.world[:3 * p.num_casters] @ light_axes.T
-        low, high = coordinates.min(axis=0), coordinates.max(axis=0)
-        texel = max((high[:2] - low[:2]).max() / (SHADOW_RESOLUTION - 4), 1e-9)
-        origin = np.array([low[0] - 2.0 * texel, low[1] - 2.0 * texel, low[2] - 1.0])
-        shadow.fill(0.0)  # the other two buffers are written, never read
-        _core.shadow_map(p.world, p.num_casters, light_axes, origin, texel, *self._shadow)
-        return light_axes, origin, texel
+        if out is None:
+            out = np.empty((len(worlds), self.height, self.width, 3), np.uint8)
+        self._frames.render(rotation, position, self._marker_rotation, marker_position, worlds,
+                            out)
+        return out
+
+    def _set_view(self) -> None:
+        """Hand the camera and the light to the core."""
+        camera = self._camera
+        self._frames.set_view(camera.eye, camera.axes(), camera.focal(self.height), NEAR,
+                              self.light, _light_axes(self.light), AMBIENT,
+                              np.array(BACKGROUND))
 
     def _pack(self) -> None:
-        """Concatenate the parts' triangles: shadow casters (solid bodies) first, then the other
-        opaque parts (planes, opaque markers), then translucent markers."""
+        """The core's renderer of the parts' triangles in drawing order: the background
+        (planes) first, then shadow casters (solid bodies), then the other opaque parts (opaque
+        markers), then translucent markers."""
         order = sorted(range(len(self._parts)), key=lambda k: self._parts[k].kind)
         parts = [self._parts[k] for k in order]
         none = np.empty((0, 3))  # so that a scene without bodies or markers packs too
-        corners = np.concatenate([none] + [part.corners for part in parts])
         counts = np.array([len(part.colors) for part in parts], dtype=np.int64)
         kinds = np.array([part.kind for part in parts], dtype=np.int64)
-        self._packed = _Packed(
-            corners=corners,
-            normals=np.concatenate([none] + [part.normals for part in parts]),
-            owner=np.repeat(np.array(order, np.int32), 3 * counts),
-            colors=np.concatenate([none] + [part.colors for part in parts]),
-            alpha=np.repeat(np.array([part.alpha for part in parts], dtype=np.float64), counts),
-            num_casters=int(counts[kinds == _CASTER].sum()),
-            num_opaque=int(counts[kinds != _TRANSLUCENT].sum()),
-            num_triangles=int(counts.sum()),
-            world=np.empty_like(corners),
-            world_normal=np.empty_like(corners),
-        )
+        self._frames = _core.FrameRenderer(
+            np.concatenate([none] + [part.corners for part in parts]),
+            np.concatenate([none] + [part.normals for part in parts]),
+            np.repeat(np.array(order, np.int32), 3 * counts),
+            np.concatenate([none] + [part.colors for part in parts]),
+            np.repeat(np.array([part.alpha for part in parts], dtype=np.float64), counts),
+            int(counts[kinds == _BACKGROUND].sum()), int(counts[kinds == _CASTER].sum()),
+            int(counts[kinds != _TRANSLUCENT].sum()),
+            self.num_bodies, self.num_markers, self.width, self.height, self.shadow_side)
+        self._set_view()
 
 
 # -- parts: tessellated bodies and markers -----------------------------------------------------
 
-_CASTER, _OPAQUE, _TRANSLUCENT = 0, 1, 2
-"""Kinds of part: a solid body (casts a shadow), other opaque geometry, translucent markers."""
+_BACKGROUND, _CASTER, _OPAQUE, _TRANSLUCENT = 0, 1, 2, 3
+_FIRST_WORLD = np.zeros(1, dtype=np.int64)
+_FIRST_WORLD.setflags(write=False)
+"""The copy that ``Renderer.render`` draws: its one world."""
+"""Kinds of part: a plane (the background), a solid body (casts a shadow), other opaque
+geometry, translucent markers."""
 
 
 @dataclass(frozen=True)
@@ -334,23 +326,6 @@ class _Part:
     kind: int
 
 
-@dataclass(frozen=True)
-class _Packed:
-    """All parts' triangles in drawing order; owner (3T,) int32 indexes the instance poses
-    (bodies, then markers); world and world_normal (3T, 3) are per-frame buffers."""
-
-    corners: np.ndarray
-    normals: np.ndarray
-    owner: np.ndarray
-    colors: np.ndarray
-    alpha: np.ndarray
-    num_casters: int
-    num_opaque: int
-    num_triangles: int
-    world: np.ndarray
-    world_normal: np.ndarray
-
-
 def _body_part(body, rgb: np.ndarray, plane_half_size: float) -> _Part:
     """The triangles of ``body`` in its body frame (the shape frame placed at
     ``body_from_shape``); a Plane's patch gets a checker of ``rgb`` and a darker tone."""
@@ -363,7 +338,7 @@ def _body_part(body, rgb: np.ndarray, plane_half_size: float) -> _Part:
         centre = vertices[triangles].mean(axis=1)
         odd = np.floor(centre[:, 0] / PLANE_TILE) + np.floor(centre[:, 1] / PLANE_TILE)
         colors[odd % 2 == 1] *= 0.94
-        return _Part(corners, normals, colors, 1.0, _OPAQUE)
+        return _Part(corners, normals, colors, 1.0, _BACKGROUND)
     return _Part(corners, normals, colors, 1.0, _CASTER)
 
 
@@ -460,6 +435,17 @@ def _light_axes(light: np.ndarray) -> np.ndarray:
     u = np.cross(helper, light)
     u /= np.linalg.norm(u)
     return np.array([u, np.cross(light, u), light])
+
+
+def shadow_side(width: int, height: int) -> int:
+    """Texels along each side of the shadow map of a ``width`` x ``height`` frame."""
+    return min(SHADOW_RESOLUTION, 2 * max(width, height))
+
+
+def _camera(value) -> Camera:
+    if not isinstance(value, Camera):
+        raise ValueError(f"Renderer.camera: expected a Camera, got {type(value).__name__}")
+    return value
 
 
 def _size(value, where: str) -> int:

@@ -31,7 +31,9 @@ double dot_row(const Mat3& matrix, int row, Vec3 v) {
 //
 // Always evaluated from the lexicographically smaller end, so the two triangles that share an
 // edge get exactly opposite values and no pixel centre falls through the crack. That choice,
-// and the differences of the ends, are made once per edge rather than at every pixel.
+// and the differences of the ends, are made once per edge rather than at every pixel; along a
+// row of pixels the term of the row's y is made once too (the same operations in the same
+// order as at(), so the same bits).
 struct Edge {
     double sx, sy;  // the smaller end
     double dx, dy;  // the other end minus it
@@ -45,25 +47,43 @@ struct Edge {
         dy = flip ? ay - by : by - ay;
     }
 
-    double at(double px, double py) const {
-        const double area = dx * (py - sy) - dy * (px - sx);
+    double row(double py) const { return dx * (py - sy); }
+
+    double at_row(double row_term, double px) const {
+        const double area = row_term - dy * (px - sx);
         return flip ? -area : area;
+    }
+
+    double at(double px, double py) const { return at_row(row(py), px); }
+
+    // Narrow [lo, hi] (pixel indices of a row whose term is row_term) to a superset of the
+    // pixels where at_row(row_term, px) / area >= 0: the exact crossing is widened by a pixel
+    // on each side, so rounding can only keep too many, which the pixel test then rejects.
+    // A NaN crossing (degenerate input) leaves the range as it is.
+    void clip_row(double row_term, double area, double& lo, double& hi) const {
+        if (dy == 0.0) {
+            return;  // the value is the same along the row: the pixel test decides
+        }
+        const double crossing = sx + row_term / dy - 0.5;  // the pixel index where it is 0
+        const bool rising = (flip ? dy : -dy) * area > 0.0;  // increases with px, over area
+        if (rising) {
+            lo = std::max(lo, std::ceil(crossing) - 1.0);
+        } else {
+            hi = std::min(hi, std::floor(crossing) + 1.0);
+        }
     }
 };
 
 // Write triangle `triangle` into the pixels whose centres it covers (edges included) where it
-// is nearer than `out.nearness` holds.
+// is nearer than `nearness` holds, and (when Attributes) its index into `ids` and its
+// interpolated attribute into `diffuse`.
 //
 // a, b, c: screen x, y (pixels), nearness z > 0 and attribute d of the corners, either
 // winding. z is interpolated linearly on screen (exact for 1/depth under perspective and for
 // depth under an orthographic view); d is interpolated so that d z is linear, which is
 // perspective-correct when z = 1/depth.
+template <bool Attributes>
 void fill(Corner a, Corner b, Corner c, int32_t triangle, const DepthBuffers& out) {
-    const Edge ab(a.x, a.y, b.x, b.y), bc(b.x, b.y, c.x, c.y), ca(c.x, c.y, a.x, a.y);
-    const double area = ab.at(c.x, c.y);
-    if (!(std::fabs(area) > 0.0)) {
-        return;
-    }
     const int64_t height = out.nearness.rows, width = out.nearness.columns;
     const double lo_x = std::max(std::min(std::min(a.x, b.x), c.x), -1.0);
     const double hi_x = std::min(std::max(std::max(a.x, b.x), c.x), width + 1.0);
@@ -78,24 +98,43 @@ void fill(Corner a, Corner b, Corner c, int32_t triangle, const DepthBuffers& ou
     const int64_t j1 = std::min(static_cast<int64_t>(std::floor(hi_x - 0.5)), width - 1);
     const int64_t i0 = std::max(static_cast<int64_t>(std::ceil(lo_y - 0.5)), int64_t{0});
     const int64_t i1 = std::min(static_cast<int64_t>(std::floor(hi_y - 0.5)), height - 1);
+    if (j0 > j1 || i0 > i1) {
+        return;  // covers no pixel centre
+    }
+    const Edge ab(a.x, a.y, b.x, b.y), bc(b.x, b.y, c.x, c.y), ca(c.x, c.y, a.x, a.y);
+    const double area = ab.at(c.x, c.y);
+    if (!(std::fabs(area) > 0.0)) {
+        return;
+    }
     const double inverse_area = 1.0 / area;
     for (int64_t i = i0; i <= i1; ++i) {
         const double py = i + 0.5;
-        const Span<double> nearness = out.nearness.row(i), diffuse = out.diffuse.row(i);
-        const Span<int32_t> ids = out.ids.row(i);
-        for (int64_t j = j0; j <= j1; ++j) {
+        const double row_a = bc.row(py), row_b = ca.row(py), row_c = ab.row(py);
+        // the pixels of the row between the edges' crossings, a superset of those covered
+        double lo = static_cast<double>(j0), hi = static_cast<double>(j1);
+        bc.clip_row(row_a, area, lo, hi);
+        ca.clip_row(row_b, area, lo, hi);
+        ab.clip_row(row_c, area, lo, hi);
+        if (!(lo <= hi)) {
+            continue;
+        }
+        const int64_t first = static_cast<int64_t>(lo), last = static_cast<int64_t>(hi);
+        const Span<double> nearness = out.nearness.row(i);
+        for (int64_t j = first; j <= last; ++j) {
             const double px = j + 0.5;
-            const double wa = bc.at(px, py) * inverse_area;
-            const double wb = ca.at(px, py) * inverse_area;
-            const double wc = ab.at(px, py) * inverse_area;
+            const double wa = bc.at_row(row_a, px) * inverse_area;
+            const double wb = ca.at_row(row_b, px) * inverse_area;
+            const double wc = ab.at_row(row_c, px) * inverse_area;
             if (wa < 0.0 || wb < 0.0 || wc < 0.0) {
                 continue;
             }
             const double z = wa * a.z + wb * b.z + wc * c.z;
             if (z > nearness[j]) {
                 nearness[j] = z;
-                ids[j] = triangle;
-                diffuse[j] = (wa * a.d * a.z + wb * b.d * b.z + wc * c.d * c.z) / z;
+                if constexpr (Attributes) {
+                    out.ids.row(i)[j] = triangle;
+                    out.diffuse.row(i)[j] = (wa * a.d * a.z + wb * b.d * b.z + wc * c.d * c.z) / z;
+                }
             }
         }
     }
@@ -135,6 +174,9 @@ int64_t texel_index(double floored, int64_t size) {
 // The point is hidden by a texel that holds a surface nearer the light; the four texels
 // around it are weighted bilinearly, so shadow edges blend over one texel.
 double lit_fraction(double u, double v, double height, Pixels<const double> shadow) {
+    if (!(u > -1.0 && v > -1.0 && u < shadow.columns + 1.0 && v < shadow.rows + 1.0)) {
+        return 1.0;  // no texel of the map around it: exactly lit (and NaN is lit)
+    }
     u = u - 0.5;  // texel (r, c) is centred on (c + 0.5, r + 0.5)
     v = v - 0.5;
     const double floor_u = std::floor(u), floor_v = std::floor(v);
@@ -197,15 +239,16 @@ void rasterize(Span<const Vec3> world, Span<const Vec3> world_normal, int64_t fi
                          cy - focal * polygon[k].y * inverse_depth, inverse_depth, polygon[k].d};
         }
         for (int k = 1; k < count - 1; ++k) {
-            fill(screen[0], screen[k], screen[k + 1], static_cast<int32_t>(t), out);
+            fill<true>(screen[0], screen[k], screen[k + 1], static_cast<int32_t>(t), out);
         }
     }
 }
 
-void shadow_map(Span<const Vec3> world, int64_t count, const Mat3& light_axes, Vec3 origin,
-                double texel, const DepthBuffers& out) {
+void shadow_map(Span<const Vec3> world, int64_t first, int64_t last, const Mat3& light_axes,
+                Vec3 origin, double texel, Pixels<double> nearness) {
+    const DepthBuffers out = {nearness, {}, {}};
     Corner corners[3];
-    for (int64_t t = 0; t < count; ++t) {
+    for (int64_t t = first; t < last; ++t) {
         const int64_t c = 3 * t;
         if (dot_row(light_axes, 2, face_normal(world, c)) > 0.0) {
             continue;
@@ -216,7 +259,7 @@ void shadow_map(Span<const Vec3> world, int64_t count, const Mat3& light_axes, V
                           (dot_row(light_axes, 1, p) - origin.y) / texel,
                           dot_row(light_axes, 2, p) - origin.z, 0.0};
         }
-        fill(corners[0], corners[1], corners[2], static_cast<int32_t>(t), out);
+        fill<false>(corners[0], corners[1], corners[2], static_cast<int32_t>(t), out);
     }
 }
 
@@ -224,9 +267,13 @@ void shade(Pixels<const double> nearness, Pixels<const int32_t> ids,
            Pixels<const double> diffuse, Pixels<const int32_t> layer_ids,
            Pixels<const double> layer_diffuse, Span<const Vec3> color, Span<const double> alpha,
            double focal, const Mat3& to_light, Vec3 light_offset, double texel,
-           Pixels<const double> shadow, double ambient, Vec3 background, Pixels<Rgb8> image) {
+           Pixels<const double> shadow, double ambient, Vec3 background, Pixels<Rgb8> image,
+           Span<double> ray_x) {
     const int64_t height = ids.rows, width = ids.columns;
     const double cx = 0.5 * width, cy = 0.5 * height;
+    for (int64_t j = 0; j < width; ++j) {
+        ray_x[j] = (j + 0.5 - cx) / focal;
+    }
     for (int64_t i = 0; i < height; ++i) {
         const double y = (cy - i - 0.5) / focal;
         for (int64_t j = 0; j < width; ++j) {
@@ -235,7 +282,7 @@ void shade(Pixels<const double> nearness, Pixels<const int32_t> ids,
             if (t >= 0) {
                 double lit = diffuse(i, j);
                 if (lit > 0.0 && shadow.rows > 0) {
-                    const Vec3 ray = {(j + 0.5 - cx) / focal, y, 1.0};
+                    const Vec3 ray = {ray_x[j], y, 1.0};
                     const double depth = 1.0 / nearness(i, j);
                     const double u = light_offset.x + depth * dot_row(to_light, 0, ray);
                     const double v = light_offset.y + depth * dot_row(to_light, 1, ray);

@@ -12,7 +12,8 @@
 // Per-pixel buffers (H, W): `nearness` (larger = nearer; 1/depth with depth in m for the
 // camera, 0 = empty), `ids` (triangle index, -1 = empty) and `diffuse` (the Lambert factor
 // max(0, n . light) in [0, 1], interpolated perspective-correctly).
-// The shadow map uses the same buffers and fill, seen orthographically along the light.
+// The shadow map uses the same fill into a nearness buffer alone, seen orthographically along
+// the light.
 //
 // Indices (owner, ids, the triangle ranges) must be in range: the bindings check them.
 #pragma once
@@ -62,16 +63,16 @@ void rasterize(Span<const Vec3> world, Span<const Vec3> world_normal, int64_t fi
                int64_t last, Vec3 eye, const Mat3& axes, double focal, double near, Vec3 light,
                const DepthBuffers& out);
 
-// Draw the faces of triangles [0, count) that face away from the light into an orthographic
-// shadow map.
+// Draw the faces of triangles [first, last) that face away from the light into an
+// orthographic shadow map of nearness alone.
 //
 // light_axes: rows u, v (the map's x and y) and the unit vector towards the light; origin: m,
 // the map's corner in (u, v) and the light coordinate at which nearness is 0; texel: m per
 // texel. Nearness is the height along the light above origin.z. Using only the faces turned
 // away from the light (the far side of each closed body) keeps lit surfaces from shadowing
 // themselves.
-void shadow_map(Span<const Vec3> world, int64_t count, const Mat3& light_axes, Vec3 origin,
-                double texel, const DepthBuffers& out);
+void shadow_map(Span<const Vec3> world, int64_t first, int64_t last, const Mat3& light_axes,
+                Vec3 origin, double texel, Pixels<double> nearness);
 
 // Colour every pixel into `image` (H, W).
 //
@@ -86,11 +87,12 @@ void shadow_map(Span<const Vec3> world, int64_t count, const Mat3& light_axes, V
 // `texel` (m) nearer the light than the point to shadow it. The map holds only the far sides
 // of bodies, which lie behind any lit surface of the same body, so this small bias suffices:
 // a body shadows its own lit side only near its terminator, where the diffuse light is weak
-// anyway.
+// anyway. ray_x (W,) is scratch: each column's x on the view plane, made once per frame.
 void shade(Pixels<const double> nearness, Pixels<const int32_t> ids,
            Pixels<const double> diffuse, Pixels<const int32_t> layer_ids,
            Pixels<const double> layer_diffuse, Span<const Vec3> color, Span<const double> alpha,
            double focal, const Mat3& to_light, Vec3 light_offset, double texel,
-           Pixels<const double> shadow, double ambient, Vec3 background, Pixels<Rgb8> image);
+           Pixels<const double> shadow, double ambient, Vec3 background, Pixels<Rgb8> image,
+           Span<double> ray_x);
 
 }  // namespace rg

@@ -1,19 +1,16 @@
-// Python face of the rasteriser (src/raster.h): rigid_gym._core.raster_transform, rasterize,
-// shadow_map and shade, used by rigid_gym/render.py. Each runs on the calling thread with the
-// GIL released.
+// Python face of the renderer's core (src/frames.h): rigid_gym._core.FrameRenderer, which
+// rigid_gym/render.py builds from its tessellated scene and draws one world or a batch with.
+// Drawing releases the GIL; one renderer draws one batch at a time.
+#include <memory>
+#include <mutex>
 #include <string>
 
 #include "array_args.h"
-#include "raster.h"
+#include "frames.h"
 
 namespace rg {
 
 namespace {
-
-template <class T, class S>
-Pixels<T> pixels(const ArrayArg<S>& a) {
-    return {rows<T>(a), extent(a, 0), extent(a, 1)};
-}
 
 Vec3 vector_arg(nb::handle value, const char* where) {
     return rows<const Vec3>(array_arg<const double>(value, where, {3}))[0];
@@ -23,151 +20,152 @@ Mat3 matrix_arg(nb::handle value, const char* where) {
     return rows<const Mat3>(array_arg<const double>(value, where, {3, 3}))[0];
 }
 
-// The writable (H, W) buffers nearness, ids and diffuse of one picture.
-struct BufferArgs {
-    ArrayArg<double> nearness;
-    ArrayArg<int32_t> ids;
-    ArrayArg<double> diffuse;
-
-    BufferArgs(const std::string& function, nb::handle n, nb::handle i, nb::handle d)
-        : nearness(array_arg<double>(n, (function + ": nearness").c_str(), {-1, -1})),
-          ids(array_arg<int32_t>(i, (function + ": ids").c_str(),
-                                 {extent(nearness, 0), extent(nearness, 1)})),
-          diffuse(array_arg<double>(d, (function + ": diffuse").c_str(),
-                                    {extent(nearness, 0), extent(nearness, 1)})) {}
-
-    DepthBuffers buffers() const {
-        return {pixels<double>(nearness), pixels<int32_t>(ids), pixels<double>(diffuse)};
-    }
-};
-
-// ValueError unless triangles [first, last) are corners 3 first ... 3 last - 1 of `world`.
-void check_triangles(int64_t first, int64_t last, const ArrayArg<const double>& world,
-                     const char* where) {
-    const int64_t triangles = extent(world, 0) / 3;
-    if (first < 0 || first > last || last > triangles) {
-        throw nb::value_error((std::string(where) + ": triangles [" + std::to_string(first) +
-                               ", " + std::to_string(last) + ") outside the " +
-                               std::to_string(triangles) + " of world")
-                                  .c_str());
-    }
+template <class T, class S>
+Array<T> copied(const ArrayArg<S>& a) {
+    const Span<const T> values = rows<const T>(a);
+    Array<T> out;
+    out.assign(values.data, values.size);
+    return out;
 }
+
+std::string text(const char* where, const std::string& what) { return std::string(where) + what; }
+
+// A FrameRenderer, its camera and light, and the lock that keeps two Python threads from
+// drawing into its buffers at once.
+struct BoundRenderer {
+    FrameRenderer renderer;
+    FrameView view{};
+    std::mutex drawing;
+
+    explicit BoundRenderer(FrameRenderer r) : renderer(std::move(r)) {}
+};
 
 }  // namespace
 
 void bind_render(nb::module_& m) {
-    m.def(
-        "raster_transform",
-        [](nb::handle local, nb::handle local_normal, nb::handle owner, nb::handle rotation,
-           nb::handle translation, nb::handle world, nb::handle world_normal) {
-            const auto l = array_arg<const double>(local, "raster_transform: local", {-1, 3});
-            const int64_t c = extent(l, 0);
-            const auto ln = array_arg<const double>(local_normal,
-                                                    "raster_transform: local_normal", {c, 3});
-            const auto o = array_arg<const int32_t>(owner, "raster_transform: owner", {c});
-            const auto r = array_arg<const double>(rotation, "raster_transform: rotation",
-                                                   {-1, 3, 3});
-            const auto t = array_arg<const double>(translation, "raster_transform: translation",
-                                                   {extent(r, 0), 3});
-            const auto w = array_arg<double>(world, "raster_transform: world", {c, 3});
-            const auto wn = array_arg<double>(world_normal, "raster_transform: world_normal",
-                                              {c, 3});
-            check_indices(rows<const int32_t>(o), 0, extent(r, 0), "raster_transform: owner",
-                          "rows of rotation and translation");
-            nb::gil_scoped_release unlocked;
-            raster_transform(rows<const Vec3>(l), rows<const Vec3>(ln), rows<const int32_t>(o),
-                             rows<const Mat3>(r), rows<const Vec3>(t), rows<Vec3>(w),
-                             rows<Vec3>(wn));
+    nb::class_<BoundRenderer> cls(
+        m, "FrameRenderer",
+        "Frames of copies of one triangle soup (src/frames.h): every copy's picture in one "
+        "call, on the core's threads. rigid_gym.render.Renderer builds and drives it.");
+    cls.def(
+        "__init__",
+        [](BoundRenderer* self, nb::handle corners, nb::handle normals, nb::handle owner,
+           nb::handle colors, nb::handle alpha, int64_t num_background, int64_t num_casters,
+           int64_t num_opaque,
+           int64_t num_bodies, int64_t num_markers, int64_t width, int64_t height,
+           int64_t shadow_side) {
+            const char* where = "FrameRenderer: ";
+            const auto c = array_arg<const double>(corners, "FrameRenderer: corners", {-1, 3});
+            const int64_t count = extent(c, 0);
+            if (count % 3 != 0) {
+                throw nb::value_error(text(where, "corners must be 3 per triangle, got " +
+                                                      std::to_string(count)).c_str());
+            }
+            const int64_t triangles = count / 3;
+            const auto n = array_arg<const double>(normals, "FrameRenderer: normals", {count, 3});
+            const auto o = array_arg<const int32_t>(owner, "FrameRenderer: owner", {count});
+            const auto k = array_arg<const double>(colors, "FrameRenderer: colors",
+                                                   {triangles, 3});
+            const auto a = array_arg<const double>(alpha, "FrameRenderer: alpha", {triangles});
+            if (num_bodies < 0 || num_markers < 0) {
+                throw nb::value_error(text(where, "num_bodies and num_markers must be >= 0")
+                                          .c_str());
+            }
+            if (!(0 <= num_background && 0 <= num_casters &&
+                  num_background + num_casters <= num_opaque && num_opaque <= triangles)) {
+                throw nb::value_error(
+                    text(where, "need 0 <= num_background, num_casters and num_background + "
+                                "num_casters <= num_opaque <= triangles (" +
+                                    std::to_string(triangles) + "), got " +
+                                    std::to_string(num_background) + ", " +
+                                    std::to_string(num_casters) + ", " +
+                                    std::to_string(num_opaque)).c_str());
+            }
+            if (width < 1 || height < 1 || shadow_side < 0 || (shadow_side > 0 && shadow_side <= 4)) {
+                throw nb::value_error(text(where, "width and height must be >= 1 and "
+                                                  "shadow_side 0 or > 4").c_str());
+            }
+            check_indices(rows<const int32_t>(o), 0, num_bodies + num_markers,
+                          "FrameRenderer: owner", "instances: bodies, then markers");
+            FrameMesh mesh;
+            mesh.corners = copied<Vec3>(c);
+            mesh.normals = copied<Vec3>(n);
+            mesh.owner = copied<int32_t>(o);
+            mesh.colors = copied<Vec3>(k);
+            mesh.alpha = copied<double>(a);
+            mesh.num_background = num_background;
+            mesh.num_casters = num_casters;
+            mesh.num_opaque = num_opaque;
+            mesh.num_bodies = num_bodies;
+            mesh.num_markers = num_markers;
+            new (self) BoundRenderer(
+                FrameRenderer(std::move(mesh), width, height, shadow_side));
         },
-        nb::arg("local"), nb::arg("local_normal"), nb::arg("owner"), nb::arg("rotation"),
-        nb::arg("translation"), nb::arg("world"), nb::arg("world_normal"),
-        "world = R p + x and world_normal = R n for every corner, with its owner's pose "
-        "(src/raster.h): local, local_normal (C, 3) float64 in the owner's frame; owner (C,) "
-        "int32; rotation (N, 3, 3), translation (N, 3) float64, m; world, world_normal (C, 3) "
-        "float64, written.");
-    m.def(
-        "rasterize",
-        [](nb::handle world, nb::handle world_normal, int64_t first, int64_t last,
-           nb::handle eye, nb::handle axes, double focal, double near, nb::handle light,
-           nb::handle nearness, nb::handle ids, nb::handle diffuse) {
-            const auto w = array_arg<const double>(world, "rasterize: world", {-1, 3});
-            const auto wn = array_arg<const double>(world_normal, "rasterize: world_normal",
-                                                    {extent(w, 0), 3});
-            check_triangles(first, last, w, "rasterize");
-            const Vec3 e = vector_arg(eye, "rasterize: eye");
-            const Mat3 a = matrix_arg(axes, "rasterize: axes");
-            const Vec3 l = vector_arg(light, "rasterize: light");
-            const BufferArgs out("rasterize", nearness, ids, diffuse);
-            nb::gil_scoped_release unlocked;
-            rasterize(rows<const Vec3>(w), rows<const Vec3>(wn), first, last, e, a, focal, near,
-                      l, out.buffers());
+        nb::arg("corners"), nb::arg("normals"), nb::arg("owner"), nb::arg("colors"),
+        nb::arg("alpha"), nb::arg("num_background"), nb::arg("num_casters"),
+        nb::arg("num_opaque"), nb::arg("num_bodies"),
+        nb::arg("num_markers"), nb::arg("width"), nb::arg("height"), nb::arg("shadow_side"),
+        "The soup (copied): corners, normals (3T, 3) float64 in their instance's frame, owner "
+        "(3T,) int32 (body b < num_bodies, else marker b - num_bodies), colors (T, 3) in "
+        "[0, 1], alpha (T,); triangles [0, num_background) are the background (drawn again only "
+        "when the view or their poses change), the next num_casters cast shadows, [0, "
+        "num_opaque) are opaque. Frames of width x height pixels, a shadow map of shadow_side^2 texels (0: "
+        "none).");
+    cls.def(
+        "set_view",
+        [](BoundRenderer& self, nb::handle eye, nb::handle axes, double focal, double near,
+           nb::handle light, nb::handle light_axes, double ambient, nb::handle background) {
+            FrameView v;
+            v.eye = vector_arg(eye, "FrameRenderer.set_view: eye");
+            v.axes = matrix_arg(axes, "FrameRenderer.set_view: axes");
+            v.focal = focal;
+            v.near = near;
+            v.light = vector_arg(light, "FrameRenderer.set_view: light");
+            v.light_axes = matrix_arg(light_axes, "FrameRenderer.set_view: light_axes");
+            v.ambient = ambient;
+            v.background = vector_arg(background, "FrameRenderer.set_view: background");
+            std::lock_guard<std::mutex> lock(self.drawing);
+            self.view = v;
         },
-        nb::arg("world"), nb::arg("world_normal"), nb::arg("first"), nb::arg("last"),
         nb::arg("eye"), nb::arg("axes"), nb::arg("focal"), nb::arg("near"), nb::arg("light"),
-        nb::arg("nearness"), nb::arg("ids"), nb::arg("diffuse"),
-        "Draw triangles first to last - 1 of the soup world, world_normal (C, 3) float64 with "
-        "a perspective camera into the buffers nearness, ids (int32), diffuse (H, W) "
-        "(src/raster.h). Back faces are skipped, the rest clipped at the plane near m in front "
-        "of the eye (3,) m; axes (3, 3) rows: right, up, forward; focal: pixels; light (3,): "
-        "unit vector towards the light, for each corner's Lambert factor max(0, n . light).");
-    m.def(
-        "shadow_map",
-        [](nb::handle world, int64_t count, nb::handle light_axes, nb::handle origin,
-           double texel, nb::handle nearness, nb::handle ids, nb::handle diffuse) {
-            const auto w = array_arg<const double>(world, "shadow_map: world", {-1, 3});
-            check_triangles(0, count, w, "shadow_map");
-            const Mat3 a = matrix_arg(light_axes, "shadow_map: light_axes");
-            const Vec3 o = vector_arg(origin, "shadow_map: origin");
-            const BufferArgs out("shadow_map", nearness, ids, diffuse);
+        nb::arg("light_axes"), nb::arg("ambient"), nb::arg("background"),
+        "The camera and light of every later frame (src/frames.h, FrameView): eye (3,) m, "
+        "axes (3, 3) rows right, up, forward; focal, pixels; near, m; light (3,) unit vector "
+        "towards the light; light_axes (3, 3) rows u, v, light; ambient; background (3,) RGB.");
+    cls.def(
+        "render",
+        [](BoundRenderer& self, nb::handle body_rotation, nb::handle body_position,
+           nb::handle marker_rotation, nb::handle marker_position, nb::handle worlds,
+           nb::handle images) {
+            const FrameRenderer& r = self.renderer;
+            const int64_t n = r.mesh().num_bodies, m = r.mesh().num_markers;
+            const auto br = array_arg<const double>(
+                body_rotation, "FrameRenderer.render: body_rotation", {-1, n, 3, 3});
+            const int64_t b = extent(br, 0);
+            const auto bp = array_arg<const double>(
+                body_position, "FrameRenderer.render: body_position", {b, n, 3});
+            const auto mr = array_arg<const double>(
+                marker_rotation, "FrameRenderer.render: marker_rotation", {m, 3, 3});
+            const auto mp = array_arg<const double>(
+                marker_position, "FrameRenderer.render: marker_position", {b, m, 3});
+            const auto w = array_arg<const int64_t>(worlds, "FrameRenderer.render: worlds", {-1});
+            const auto im = array_arg<uint8_t>(images, "FrameRenderer.render: images",
+                                               {extent(w, 0), r.height(), r.width(), 3});
+            check_indices(rows<const int64_t>(w), 0, b, "FrameRenderer.render: worlds",
+                          "copies of the poses");
+            const FramePoses poses = {rows<const Mat3>(br), rows<const Vec3>(bp),
+                                      rows<const Mat3>(mr), rows<const Vec3>(mp)};
             nb::gil_scoped_release unlocked;
-            shadow_map(rows<const Vec3>(w), count, a, o, texel, out.buffers());
+            std::lock_guard<std::mutex> lock(self.drawing);
+            self.renderer.render(poses, rows<const int64_t>(w), self.view, rows<Rgb8>(im));
         },
-        nb::arg("world"), nb::arg("count"), nb::arg("light_axes"), nb::arg("origin"),
-        nb::arg("texel"), nb::arg("nearness"), nb::arg("ids"), nb::arg("diffuse"),
-        "Draw the faces of triangles 0 to count - 1 of world (C, 3) float64 that face away "
-        "from the light into an orthographic shadow map nearness, ids (int32), diffuse (S, S) "
-        "(src/raster.h). light_axes (3, 3): rows u, v (the map's x and y) and the unit vector "
-        "towards the light; origin (3,) m: the map's corner in (u, v) and the light coordinate "
-        "at which nearness is 0; texel: m per texel.");
-    m.def(
-        "shade",
-        [](nb::handle nearness, nb::handle ids, nb::handle diffuse, nb::handle layer_ids,
-           nb::handle layer_diffuse, nb::handle color, nb::handle alpha, double focal,
-           nb::handle to_light, nb::handle light_offset, double texel, nb::handle shadow,
-           double ambient, nb::handle background, nb::handle image) {
-            const auto i = array_arg<const int32_t>(ids, "shade: ids", {-1, -1});
-            const int64_t h = extent(i, 0), w = extent(i, 1);
-            const auto n = array_arg<const double>(nearness, "shade: nearness", {h, w});
-            const auto d = array_arg<const double>(diffuse, "shade: diffuse", {h, w});
-            const auto li = array_arg<const int32_t>(layer_ids, "shade: layer_ids", {h, w});
-            const auto ld = array_arg<const double>(layer_diffuse, "shade: layer_diffuse", {h, w});
-            const auto c = array_arg<const double>(color, "shade: color", {-1, 3});
-            const int64_t t = extent(c, 0);
-            const auto a = array_arg<const double>(alpha, "shade: alpha", {t});
-            const Mat3 tl = matrix_arg(to_light, "shade: to_light");
-            const Vec3 lo = vector_arg(light_offset, "shade: light_offset");
-            const auto s = array_arg<const double>(shadow, "shade: shadow", {-1, -1});
-            const Vec3 b = vector_arg(background, "shade: background");
-            const auto im = array_arg<uint8_t>(image, "shade: image", {h, w, 3});
-            check_indices(rows<const int32_t>(i), -1, t, "shade: ids", "rows of color, -1: none");
-            check_indices(rows<const int32_t>(li), -1, t, "shade: layer_ids",
-                          "rows of color, -1: none");
-            nb::gil_scoped_release unlocked;
-            shade(pixels<const double>(n), pixels<const int32_t>(i), pixels<const double>(d),
-                  pixels<const int32_t>(li), pixels<const double>(ld), rows<const Vec3>(c),
-                  rows<const double>(a), focal, tl, lo, texel, pixels<const double>(s), ambient,
-                  b, pixels<Rgb8>(im));
-        },
-        nb::arg("nearness"), nb::arg("ids"), nb::arg("diffuse"), nb::arg("layer_ids"),
-        nb::arg("layer_diffuse"), nb::arg("color"), nb::arg("alpha"), nb::arg("focal"),
-        nb::arg("to_light"), nb::arg("light_offset"), nb::arg("texel"), nb::arg("shadow"),
-        nb::arg("ambient"), nb::arg("background"), nb::arg("image"),
-        "Colour every pixel into image (H, W, 3) uint8 (src/raster.h): a surface pixel of "
-        "triangle t = ids[i, j] (H, W) is color[t] (T, 3) times ambient + (1 - ambient) * "
-        "diffuse * lit, lit its unshadowed fraction in the shadow map shadow (S, S; (0, 0): no "
-        "shadows), reached through light_offset (3,) + depth * to_light (3, 3) @ (x, y, 1) and "
-        "one texel (m) of bias; an empty pixel is background (3,). A translucent triangle "
-        "f = layer_ids[i, j] in front is blended over with alpha[f] (T,).");
+        nb::arg("body_rotation"), nb::arg("body_position"), nb::arg("marker_rotation"),
+        nb::arg("marker_position"), nb::arg("worlds"), nb::arg("images"),
+        "Draw copy worlds[k] (k,) int64 into images[k] ((k, H, W, 3) uint8), shared out over "
+        "the core's threads: body_rotation (B, n, 3, 3) and body_position (B, n, 3) m are the "
+        "copies' bodies (World.state's rotation and position), marker_rotation (m, 3, 3) the "
+        "markers' orientations (every copy's), marker_position (B, m, 3) m each copy's "
+        "markers.");
 }
 
 }  // namespace rg
