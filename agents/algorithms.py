@@ -1,21 +1,69 @@
-"""The learning algorithms the baselines use, by name, and how a saved model names its own."""
+"""The learning algorithms the baselines use, by name, on which learner, and how a saved model
+names its own.
+
+Two learners run the same algorithms behind stable-baselines3's interfaces (``learn``,
+callbacks, VecEnv, ``HerReplayBuffer``, ``.zip`` models):
+
+- ``sbx``: SBX (``sbx-rl``, the SB3 maintainers' JAX port, the ``fast`` extra): the off-policy
+  update is one jitted call per vector step (all its gradient steps in a ``fori_loop``), 2-4
+  times the env steps per second of PyTorch's on one core (docs/architecture.md).
+- ``sb3``: stable-baselines3 on PyTorch, what the ``train`` extra installs.
+
+``default_learner()`` is sbx where it imports, else sb3. PPO trains on SB3 either way: its
+pace is the env's (a gradient step per thousands of env steps), not the learner's.
+"""
 
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import json
 import zipfile
 from pathlib import Path
 
 ALGORITHMS = ("sac", "tqc", "ppo", "bc_sac")
 """What ``rigid-gym train`` trains (hyperparams.yml's ``algo``)."""
+LEARNERS = ("sbx", "sb3")
+"""The learners, fastest first (see the module docstring)."""
 SB3_PACKAGES = ("stable_baselines3", "sb3_contrib")
 """Where other algorithm classes (A2C, DDPG, ...) are looked up, by class name."""
 
 
-def algorithm_class(name: str):
-    """The SB3 class for ``name`` (sac, tqc, ppo, or bc_sac: SAC with a behaviour-cloning loss
-    on the demonstrations, ``rigid_gym.agents.bc_sac``)."""
+def learner_available(name: str) -> bool:
+    """Whether learner ``name`` (one of LEARNERS) can be imported here."""
+    if name not in LEARNERS:
+        raise ValueError(f"train: learner must be one of {LEARNERS}, got {name!r}")
+    if name == "sb3":
+        return importlib.util.find_spec("stable_baselines3") is not None
+    return all(importlib.util.find_spec(m) is not None for m in ("sbx", "jax", "flax"))
+
+
+def default_learner() -> str:
+    """sbx where SBX and JAX import, else sb3."""
+    return "sbx" if learner_available("sbx") else "sb3"
+
+
+def learner_for(algo: str, learner: str | None) -> str:
+    """The learner ``algo`` trains on: ``learner`` (None: ``default_learner()``), except that
+    ppo always trains on sb3; a ValueError if the one asked for is not installed."""
+    learner = learner or default_learner()
+    if not learner_available(learner):
+        raise ValueError(f"train: learner {learner!r} is not installed (pip install -e "
+                         "'.[fast]' for sbx); use --learner sb3")
+    return "sb3" if algo == "ppo" else learner
+
+
+def algorithm_class(name: str, learner: str = "sb3"):
+    """The class for ``name`` on ``learner``: sac, tqc, ppo, or bc_sac (SAC with a
+    behaviour-cloning loss on the demonstrations, ``rigid_gym.agents.bc_sac``); on sbx, SBX's
+    SAC and TQC and ``bc_sac.BCSACJax`` (ppo is SB3's, see ``learner_for``)."""
+    if learner == "sbx" and name != "ppo":
+        if name == "bc_sac":
+            from rigid_gym.agents.bc_sac import BCSACJax
+            return BCSACJax
+        if name in ("sac", "tqc"):
+            import sbx
+            return {"sac": sbx.SAC, "tqc": sbx.TQC}[name]
     if name == "bc_sac":
         from rigid_gym.agents.bc_sac import BCSAC
         return BCSAC
@@ -36,8 +84,14 @@ def algorithm_class(name: str):
 
 
 def find_algorithm(name: str):
-    """The class for ``name``: one of ALGORITHMS (any case), else the class of that name
-    (any case) in SB3_PACKAGES; a ValueError when there is none."""
+    """The class for ``name``: ``sbx:<algo>`` (a model SBX saved, ``algorithm_of``), one of
+    ALGORITHMS (any case, SB3's), else the class of that name (any case) in SB3_PACKAGES; a
+    ValueError when there is none."""
+    if name.lower().startswith("sbx:"):
+        if not learner_available("sbx"):
+            raise ValueError("load_model: this model was trained with SBX (JAX): pip install "
+                             "-e '.[fast]'")
+        return algorithm_class(name.lower()[4:], "sbx")
     if name.lower() in ALGORITHMS:
         return algorithm_class(name.lower())
     for package in SB3_PACKAGES:
@@ -54,12 +108,15 @@ def find_algorithm(name: str):
 
 def algorithm_of(path: str | Path) -> str:
     """The algorithm of a stable-baselines3 zip, from its policy class's module
-    (``stable_baselines3.sac.policies`` -> ``sac``); PPO and A2C share
-    ``stable_baselines3.common.policies`` and only PPO saves a ``clip_range``."""
+    (``stable_baselines3.sac.policies`` -> ``sac``, SBX's ``sbx.sac.policies`` -> ``sbx:sac``);
+    PPO and A2C share ``stable_baselines3.common.policies`` and only PPO saves a
+    ``clip_range``."""
     try:
         with zipfile.ZipFile(path) as archive:
             data = json.loads(archive.read("data"))
         module = data["policy_class"]["__module__"].split(".")
+        if module[0] == "sbx":
+            return f"sbx:{module[1]}"
         if module[1] == "common":
             return "PPO" if "clip_range" in data else "A2C"
         return module[1]

@@ -13,10 +13,14 @@ demonstrator pursued unless ``bc_relabel``: a demo action is the right action fo
 not for a goal relabelled from where the cubes happened to be later. The Q-filter drops the term where the critic already rates the policy's action
 above the demonstrator's, so the policy can outgrow the demonstrations.
 
-Saved models load as plain SAC (``rigid-gym evaluate``): the policy is SAC's.
+Two implementations of the one loss: ``BCSAC`` on stable-baselines3 (PyTorch) and
+``BCSACJax`` on SBX (JAX), whose gradient steps of a vector step run in one jitted loop.
+Saved models load as plain SAC of their learner (``rigid-gym evaluate``): the policy is SAC's.
 """
 
 from __future__ import annotations
+
+from functools import partial
 
 import numpy as np
 import torch as th
@@ -26,8 +30,9 @@ from stable_baselines3 import SAC, HerReplayBuffer
 from stable_baselines3.common.utils import polyak_update
 
 
-class BCSAC(SAC):
-    """SAC plus a Q-filtered behaviour-cloning term. bc_weight: its weight in the actor loss
+class DemoBuffer:
+    """The demonstrations' buffer and the loss's settings, shared by both implementations
+    (mixed in before the learner's SAC). bc_weight: the BC term's weight in the actor loss
     (0: plain SAC); bc_batch_size: demo samples per gradient step; q_filter: False keeps every
     demo sample; bc_relabel: HER-relabel the demo samples' goals as the replay buffer does."""
 
@@ -52,6 +57,11 @@ class BCSAC(SAC):
 
     def _excluded_save_params(self) -> list[str]:
         return super()._excluded_save_params() + ["demo_buffer"]
+
+
+class BCSAC(DemoBuffer, SAC):
+    """stable-baselines3's SAC plus the Q-filtered behaviour-cloning term (``DemoBuffer``'s
+    arguments)."""
 
     def _bc_loss(self) -> tuple[th.Tensor, float]:
         """The filtered behaviour-cloning loss and the fraction of demo samples it kept."""
@@ -129,3 +139,117 @@ class BCSAC(SAC):
         for name, values in logs.items():
             if values:
                 self.logger.record(f"train/{name}", np.mean(values))
+
+
+def _jax_class():
+    """BCSACJax, made on first use so that this module imports where JAX is not installed."""
+    import jax
+    import jax.numpy as jnp
+    import sbx
+
+    class BCSACJax(DemoBuffer, sbx.SAC):
+        """SBX's SAC plus the Q-filtered behaviour-cloning term (``DemoBuffer``'s arguments):
+        each vector step samples ``gradient_steps`` batches of the replay buffer and of the
+        demonstrations and runs every gradient step in one jitted ``fori_loop``, as SBX's SAC
+        does (``policy_delay`` 1: the actor steps with the critic)."""
+
+        def train(self, gradient_steps: int, batch_size: int) -> None:
+            use_bc = self.bc_weight > 0 and self.demo_buffer is not None \
+                and self.demo_buffer.size() > 0
+            if not use_bc:
+                return super().train(gradient_steps, batch_size)
+            if self.policy_delay != 1:
+                raise ValueError("bc_sac on sbx: policy_delay must be 1")
+            data = flat_samples(self, self.replay_buffer, batch_size * gradient_steps)
+            demo = flat_samples(self, self.demo_buffer, self.bc_batch_size * gradient_steps)
+            learning_rate = self.lr_schedule(self._current_progress_remaining)
+            self._update_learning_rate(self.policy.actor_state.opt_state,
+                                       learning_rate=learning_rate, name="learning_rate_actor")
+            self._update_learning_rate(self.policy.qf_state.opt_state,
+                                       learning_rate=self.initial_qf_learning_rate or learning_rate,
+                                       name="learning_rate_critic")
+            (self.policy.qf_state, self.policy.actor_state, self.ent_coef_state, self.key,
+             (actor_loss, qf_loss, bc_loss, kept)) = self._train_bc(
+                self.tau, self.target_entropy, self.bc_weight, gradient_steps, self.q_filter,
+                data, demo[0], demo[1], self.policy.qf_state, self.policy.actor_state,
+                self.ent_coef_state, self.key)
+            self._n_updates += gradient_steps
+            self.logger.record("train/n_updates", self._n_updates, exclude="tensorboard")
+            for name, value in (("actor_loss", actor_loss), ("critic_loss", qf_loss),
+                                ("bc_loss", bc_loss), ("bc_kept", kept)):
+                self.logger.record(f"train/{name}", float(value))
+
+        @classmethod
+        @partial(jax.jit, static_argnames=["cls", "gradient_steps", "q_filter"])
+        def _train_bc(cls, tau, target_entropy, bc_weight, gradient_steps, q_filter, data,
+                      demo_obs, demo_actions, qf_state, actor_state, ent_coef_state, key):
+            batch = data[0].shape[0] // gradient_steps
+            demo_batch = demo_obs.shape[0] // gradient_steps
+
+            def one_update(i, carry):
+                qf_state, actor_state, ent_coef_state, key, _ = carry
+                part = [jax.lax.dynamic_slice_in_dim(x, i * batch, batch) for x in data]
+                obs, actions, next_obs, dones, rewards, discounts = part
+                qf_state, (qf_loss, _), key = cls.update_critic(
+                    actor_state, qf_state, ent_coef_state, obs, actions, next_obs, rewards,
+                    dones, discounts, key)
+                qf_state = cls.soft_update(tau, qf_state)
+                d_obs = jax.lax.dynamic_slice_in_dim(demo_obs, i * demo_batch, demo_batch)
+                d_act = jax.lax.dynamic_slice_in_dim(demo_actions, i * demo_batch, demo_batch)
+                key, noise_key, dropout_key = jax.random.split(key, 3)
+                ent_coef = ent_coef_state.apply_fn({"params": ent_coef_state.params})
+
+                def min_q(observations, actions):
+                    return jnp.min(qf_state.apply_fn(qf_state.params, observations, actions,
+                                                     rngs={"dropout": dropout_key}), axis=0)[:, 0]
+
+                def actor_loss(params):
+                    dist = actor_state.apply_fn(params, obs)
+                    sampled = dist.sample(seed=noise_key)
+                    log_prob = dist.log_prob(sampled).reshape(-1, 1)
+                    q_pi = jnp.min(qf_state.apply_fn(qf_state.params, obs, sampled,
+                                                     rngs={"dropout": dropout_key}), axis=0)
+                    sac_loss = (ent_coef * log_prob - q_pi).mean()
+                    mode = actor_state.apply_fn(params, d_obs).mode()
+                    error = ((mode - d_act) ** 2).sum(axis=1)
+                    if q_filter:  # keep the samples where the critic rates the demo higher
+                        keep = jax.lax.stop_gradient(
+                            (min_q(d_obs, d_act) > min_q(d_obs, mode)).astype(jnp.float32))
+                    else:
+                        keep = jnp.ones_like(error)
+                    bc = (keep * error).sum() / jnp.maximum(keep.sum(), 1.0)
+                    return sac_loss + bc_weight * bc, (-log_prob.mean(), bc, keep.mean())
+
+                (loss, (entropy, bc, kept)), grads = jax.value_and_grad(
+                    actor_loss, has_aux=True)(actor_state.params)
+                actor_state = actor_state.apply_gradients(grads=grads)
+                ent_coef_state, _ = cls.update_temperature(target_entropy, ent_coef_state,
+                                                           entropy)
+                return qf_state, actor_state, ent_coef_state, key, (loss, qf_loss, bc, kept)
+
+            zero = jnp.array(0.0)
+            carry = (qf_state, actor_state, ent_coef_state, key, (zero, zero, zero, zero))
+            return jax.lax.fori_loop(0, gradient_steps, one_update, carry)
+
+    return BCSACJax
+
+
+def flat_samples(model, buffer, count: int) -> tuple:
+    """``count`` samples of ``buffer`` as SBX trains on them: (observations, actions,
+    next observations, dones, rewards, discounts) numpy arrays, a Dict observation flattened
+    in its space's key order (``prepare_obs``'s)."""
+    data = buffer.sample(count, env=model.get_vec_normalize_env())
+    keys = list(model.observation_space.keys())
+    obs = np.concatenate([data.observations[k].numpy() for k in keys], axis=1)
+    next_obs = np.concatenate([data.next_observations[k].numpy() for k in keys], axis=1)
+    discounts = np.full(count, model.gamma, dtype=np.float32) if data.discounts is None \
+        else data.discounts.numpy().flatten()
+    return (obs, data.actions.numpy(), next_obs, data.dones.numpy().flatten(),
+            data.rewards.numpy().flatten(), discounts)
+
+
+def __getattr__(name: str):
+    if name == "BCSACJax":  # JAX is imported only when this class is asked for
+        globals()[name] = _jax_class()
+        return globals()[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

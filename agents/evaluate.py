@@ -1,10 +1,11 @@
 """Evaluate a trained baseline: success rate and returns over seeded episodes.
 
     from rigid_gym.agents.evaluate import evaluate
-    evaluate("runs/Push/tqc-seed0/model.zip", episodes=100)
+    evaluate("runs/Push-sac-seed0/model.zip", episodes=100)
 
-    rigid-gym evaluate runs/Push/tqc-seed0/model.zip --episodes 100
+    rigid-gym evaluate runs/Push-sac-seed0/model.zip --episodes 100
     rigid-gym evaluate agents/models/stack_bcsac_seed0.zip --episodes 100
+    python -m rigid_gym.agents.evaluate      # re-evaluate the committed models, write their figures
 
 The env id and algorithm come from the model's settings file, or are given: ``run.json`` in
 the folder of a run's ``model.zip`` (``rigid-gym train`` writes it), or ``<name>.json``
@@ -25,6 +26,8 @@ from rigid_gym.agents.progress import bar
 
 EVAL_SEED = 1_000_000
 """Evaluation episodes use seeds EVAL_SEED, EVAL_SEED + 1, ...; training uses small seeds."""
+MODELS = Path(__file__).with_name("models")
+"""The committed models: NAME.zip, with NAME.json (settings and ``evaluation``) beside each."""
 
 
 def success_rate(model, env: gym.Env, episodes: int, seed: int = EVAL_SEED,
@@ -55,10 +58,19 @@ def success_rate(model, env: gym.Env, episodes: int, seed: int = EVAL_SEED,
 def load_model(path: str | Path, env: gym.Env, algo: str | None = None):
     """Load a stable-baselines3 model zip for ``env`` (HER models need their env to load).
     ``algo``: sac, tqc, ppo, bc_sac or an SB3 class name (A2C, ...), default read from the
-    zip (:func:`algorithm_of`)."""
+    zip (:func:`algorithm_of`); a zip that SBX saved loads into SBX's class whatever
+    ``algo`` says."""
     if not Path(path).is_file():
         raise ValueError(f"load_model: no model file at {path}")
-    cls = find_algorithm(algo or algorithm_of(path))
+    try:
+        found = algorithm_of(path)
+    except ValueError:
+        if algo is None:
+            raise
+        found = None
+    if found is not None and found.startswith("sbx:"):  # SBX's zips load only into SBX's classes
+        algo = found
+    cls = find_algorithm(algo or found)
     try:
         return cls.load(path, env=env, device="cpu")
     except ValueError as exc:  # spaces that differ from the env's
@@ -92,3 +104,24 @@ def evaluate(model_path: str | Path, env_id: str | None = None, episodes: int = 
     model = load_model(model_path, env, algo or meta.get("algo"))
     result = success_rate(model, env, episodes, seed, deterministic, progress)
     return {"env_id": env_id, **result}
+
+
+def record_evaluation(model_path: str | Path, episodes: int = 100) -> dict:
+    """Evaluate a committed model (``<name>.zip`` with ``<name>.json``) over ``episodes``
+    episodes from EVAL_SEED and write the figures into its json as ``evaluation``
+    ({"episodes", "seed", "success_rate", "mean_return"}); returns them."""
+    meta_path = Path(model_path).with_suffix(".json")
+    meta = json.loads(meta_path.read_text())
+    result = evaluate(model_path, episodes=episodes)
+    meta["evaluation"] = {"episodes": episodes, "seed": EVAL_SEED,
+                          "success_rate": result["success_rate"],
+                          "mean_return": round(result["mean_return"], 3)}
+    meta_path.write_text(json.dumps(meta, indent=2) + "\n")
+    return meta["evaluation"]
+
+
+if __name__ == "__main__":
+    for path in sorted(MODELS.glob("*.zip")):
+        figures = record_evaluation(path)
+        print(f"{path.name}: success {figures['success_rate']:.0%} over {figures['episodes']} "
+              "episodes", flush=True)

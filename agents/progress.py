@@ -11,8 +11,10 @@ from tqdm import tqdm
 def bar(total: int, description: str, shown: bool, unit: str = "episode") -> tqdm:
     """A progress bar of ``total`` ``unit``s: ``update(n)`` as they finish,
     ``set_postfix_str`` for a figure so far, ``close()`` at the end. Nothing is drawn
-    unless ``shown``."""
-    return tqdm(total=total, desc=description, unit=unit, disable=not shown, leave=False,
+    unless ``shown`` and standard output is a terminal: a log written to a file gets no
+    redraws (the notes, one line each, still go to it)."""
+    return tqdm(total=total, desc=description, unit=unit, leave=False,
+                disable=not (shown and sys.stdout.isatty()),
                 file=sys.stderr, dynamic_ncols=True)
 
 

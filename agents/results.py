@@ -1,124 +1,177 @@
-"""What the trained baselines achieved: the results table and the learning curves.
+"""The results table and the learning curves, from the runs' result files alone.
 
-    python -m rigid_gym.agents.results runs --episodes 100 --plots docs/images
+    python -m rigid_gym.agents.results                       # agents/results -> README's table
+    python -m rigid_gym.agents.results agents/results --plots docs/images
 
-For every env id under ``runs`` (folders written by ``rigid_gym.agents.train``) it evaluates
-each seed's final model over ``--episodes`` seeded episodes, prints a markdown table (mean and
-spread over seeds) and draws success rate against env steps, one PNG per task, the mean over
-seeds as a line and the range between seeds shaded.
+Every finished run of the table (``rigid_gym.agents.table``, or ``train(results=...)``)
+writes ``<name>-<algo>-seed<k>.json`` (``train.RESULT_KEYS``). This prints a markdown table,
+one row per env id and method: mean and spread of the final success rate over the seeds (each
+a deterministic evaluation of 100 episodes), env steps, wall and CPU time per run and the
+machine; and draws ``curve_<task>.png`` per task: success rate against env steps and against
+wall minutes, one line per method (the mean over seeds), the range between seeds shaded.
 """
 
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
 
-from rigid_gym.agents.evaluate import evaluate
+RESULTS = Path(__file__).with_name("results")
 
 
-def find_runs(root: Path) -> dict[str, list[Path]]:
-    """Run folders under ``root`` holding a model.zip, grouped by env id."""
-    runs = defaultdict(list)
-    for meta in sorted(Path(root).glob("**/run.json")):
-        if (meta.parent / "model.zip").is_file():
-            runs[json.loads(meta.read_text())["env_id"]].append(meta.parent)
-    return dict(runs)
+def method(run: dict) -> str:
+    """The algorithm as the table names it, from a run.json record, e.g. "SAC + HER + 200
+    demos" or "PPO, shaped reward"."""
+    name = run["algo"].upper()
+    if "HerReplayBuffer" in str(run["kwargs"].get("replay_buffer_class", "")):
+        name += " + HER"
+    demos = run.get("demonstrations")
+    if demos:
+        name += f" + {demos['episodes']} demos"
+    reward = (run.get("env_kwargs") or {}).get("reward_type")
+    return name + (f", {reward} reward" if reward else "")
 
 
-def learning_curve(folder: Path) -> tuple[np.ndarray, np.ndarray]:
-    """(timesteps (k,), success_rate (k,)) from a run's evaluations.csv."""
-    with open(folder / "evaluations.csv") as f:
-        rows = list(csv.DictReader(f))
-    return (np.array([int(r["timesteps"]) for r in rows]),
-            np.array([float(r["success_rate"]) for r in rows]))
+def load_results(folder: str | Path) -> list[dict]:
+    """Every result file (``*.json``) in ``folder``, sorted by name."""
+    return [json.loads(path.read_text()) for path in sorted(Path(folder).glob("*.json"))]
 
 
-def plot_curves(env_id: str, folders: list[Path], path: Path) -> None:
-    """Success rate vs env steps: mean over seeds, the seeds' range shaded."""
+def grouped(results: list[dict]) -> dict[tuple[str, str], list[dict]]:
+    """Results by (env id, method), each group sorted by seed, in order of first appearance."""
+    groups = defaultdict(list)
+    for result in results:
+        groups[(result["env_id"], result["method"])].append(result)
+    return {key: sorted(runs, key=lambda r: r["seed"]) for key, runs in groups.items()}
+
+
+def duration(seconds: float) -> str:
+    """Seconds as the table shows them: "12 s" under a minute, else "3.5 min"."""
+    return f"{seconds:.0f} s" if seconds < 60 else f"{seconds / 60:.1f} min"
+
+
+def steps(count: float) -> str:
+    """An env step count as the table shows it: 40k, 1.2M, 950."""
+    if count >= 1e6:
+        return f"{count / 1e6:.3g}M"
+    return f"{count / 1e3:.3g}k" if count >= 1e3 else f"{count:.0f}"
+
+
+TABLE_HEADER = ("| task | method | learner | env steps | wall time per run | CPU time per run | "
+                "seeds | success (mean ± std over seeds) |\n"
+                "|---|---|---|---|---|---|---|---|")
+"""The results table's header rows (markdown)."""
+
+
+def table_row(runs: list[dict]) -> str:
+    """The row of one (env id, method)'s runs (result dicts, one per seed): env steps (plus
+    the demonstrations'), mean wall and CPU time with their range, the seeds, and the mean and
+    standard deviation of the final success rates with every seed's."""
+    first = runs[0]
+    rates = np.array([r["success"] for r in runs])
+    wall = np.array([r["wall_s"] for r in runs])
+    cpu = np.array([r["cpu_s"] for r in runs])
+    demo = first.get("demo_env_steps", 0)
+    spent = steps(first["env_steps"]) + (f" + {steps(demo)} demo" if demo else "")
+
+    def spread(values: np.ndarray) -> str:
+        text = duration(values.mean())
+        return text + (f" ({duration(values.min())}-{duration(values.max())})"
+                       if len(values) > 1 else "")
+
+    return (f"| {first['env_id']} | {first['method']} | {first.get('learner', '')} | {spent} | "
+            f"{spread(wall)} | {spread(cpu)} | {len(runs)} | "
+            f"**{rates.mean():.0%}** ± {rates.std():.0%} "
+            f"({', '.join(f'{r:.0%}' for r in rates)}) |")
+
+
+def table(results: list[dict]) -> str:
+    """The markdown results table of ``results`` (result dicts), with the machine(s) they ran
+    on and the evaluation's episodes below it."""
+    lines = [TABLE_HEADER] + [table_row(runs) for runs in grouped(results).values()]
+    machines = sorted({r.get("machine", "unknown machine") for r in results})
+    episodes = sorted({r["episodes"] for r in results})
+    lines += ["", f"Final evaluation: deterministic policy, {', '.join(map(str, episodes))} "
+              f"episodes per seed on seeds apart from training's. Machine: "
+              f"{'; '.join(machines)}; one process of one thread per run."]
+    return "\n".join(lines)
+
+
+def band(runs: list[dict], key: str, scale: float = 1.0, points: int = 100):
+    """The seeds' curves on a common x (``key``: env_steps or wall_s, times ``scale``) up to
+    the shortest run's end: (x (points,), mean (points,), low (points,), high (points,))."""
+    curves = [(np.array([p[key] for p in r["curve"]]) * scale,
+               np.array([p["success"] for p in r["curve"]])) for r in runs]
+    end = min(x[-1] for x, _ in curves)
+    grid = np.linspace(min(x[0] for x, _ in curves), end, points)
+    values = np.array([np.interp(grid, x, y) for x, y in curves])
+    return grid, values.mean(axis=0), values.min(axis=0), values.max(axis=0)
+
+
+def plot_task(task: str, groups: dict[tuple[str, str], list[dict]], path: Path) -> None:
+    """``task``'s learning curves into ``path`` (PNG): success against env steps (left) and
+    against wall minutes (right), a line per method (mean over seeds), the seeds' range
+    shaded; env steps on a log axis where the budgets differ more than tenfold."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    curves = [learning_curve(f) for f in folders]
-    length = min(len(t) for t, _ in curves)
-    steps = curves[0][0][:length]
-    rates = np.array([r[:length] for _, r in curves])
-    fig, ax = plt.subplots(figsize=(6, 3.6))
-    ax.fill_between(steps, rates.min(axis=0), rates.max(axis=0), alpha=0.25,
-                    label=f"range over {len(folders)} seeds")
-    ax.plot(steps, rates.mean(axis=0), lw=2, label="mean")
-    ax.set(xlabel="env steps", ylabel="success rate (evaluation)", ylim=(-0.02, 1.02),
-           title=f"{env_id}: {method(json.loads((folders[0] / 'run.json').read_text()))}")
-    ax.grid(alpha=0.3)
-    ax.legend(loc="lower right")
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8), sharey=True)
+    for k, ((env_id, name), runs) in enumerate(groups.items()):
+        color = f"C{k}"
+        label = f"{name} ({len(runs)} seed{'s' if len(runs) > 1 else ''})"
+        for ax, key, scale in ((axes[0], "env_steps", 1e-3), (axes[1], "wall_s", 1 / 60)):
+            x, mean, low, high = band(runs, key, scale)
+            ax.fill_between(x, low, high, color=color, alpha=0.2, lw=0)
+            ax.plot(x, mean, color=color, lw=2, label=label)
+    ends = [runs[0]["curve"][-1]["env_steps"] for runs in groups.values()]
+    if max(ends) > 10 * min(ends):  # budgets that far apart (PPO's and SAC's) share a log axis
+        axes[0].set_xscale("log")
+    axes[0].set(xlabel="env steps (thousands)", ylabel="success rate (evaluation)",
+                ylim=(-0.02, 1.02))
+    axes[1].set(xlabel="wall time (minutes, one thread)")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    axes[1].legend(loc="lower right", fontsize=8)
+    fig.suptitle(f"{task}: mean over seeds, range shaded")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
 
-def method(run: dict) -> str:
-    """The algorithm as the table names it, e.g. "SAC + HER + 200 demos"."""
-    name = run["algo"].upper()
-    if "HerReplayBuffer" in str(run["kwargs"].get("replay_buffer_class", "")):
-        name += " + HER"
-    demos = run.get("demonstrations")
-    return f"{name} + {demos['episodes']} demos" if demos else name
+def plot_curves(results: list[dict], folder: Path) -> list[Path]:
+    """``curve_<task>.png`` in ``folder`` for every task of ``results``; returns the paths."""
+    by_task = defaultdict(dict)
+    for (env_id, name), runs in grouped(results).items():
+        by_task[env_id.split("/")[-1].split("-v")[0].removesuffix("Dense")][(env_id, name)] = runs
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for task, groups in by_task.items():
+        paths.append(folder / f"curve_{task}.png")
+        plot_task(task, groups, paths[-1])
+    return paths
 
 
-def env_steps(run: dict) -> str:
-    """Training env steps, plus the demonstrations' steps where there were any."""
-    demos = run.get("demonstrations")
-    return f"{run['timesteps']:,}" + (f" + {demos['env_steps']:,} demo" if demos else "")
-
-
-def minutes(runs: list[dict], key: str) -> str:
-    """Mean of ``key`` (seconds) over the runs that recorded it, in minutes (seconds under one
-    minute); older runs have no cpu_seconds."""
-    known = [run[key] for run in runs if key in run]
-    if not known:
-        return "—"
-    mean = np.mean(known)
-    text = f"{mean / 60:.0f} min" if mean >= 60 else f"{mean:.0f} s"
-    return text + ("" if len(known) == len(runs) else f" ({len(known)} of {len(runs)} runs)")
-
-
-TABLE_HEADER = ("| task | algorithm | env steps | wall time per seed | CPU time per seed | seeds | "
-                "success rate (mean ± std over seeds) |\n|---|---|---|---|---|---|---|")
-"""The results table's header rows (markdown)."""
-
-
-def table_row(task: str, runs: list[dict], rates: list[float]) -> str:
-    """One row of the results table: ``task`` (an env id, maybe with its settings), the runs'
-    run.json records (one per seed, the first naming the method and budget) and their success
-    rates (fractions)."""
-    return (f"| {task} | {method(runs[0])} | {env_steps(runs[0])} | "
-            f"{minutes(runs, 'wall_seconds')} | {minutes(runs, 'cpu_seconds')} | {len(runs)} | "
-            f"{np.mean(rates):.0%} ± {np.std(rates):.0%} "
-            f"({', '.join(f'{r:.0%}' for r in rates)}) |")
-
-
-def main():
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("runs", type=Path)
-    parser.add_argument("--episodes", type=int, default=100)
-    parser.add_argument("--plots", type=Path, default=Path("docs/images"))
-    args = parser.parse_args()
-    print(TABLE_HEADER)
-    args.plots.mkdir(parents=True, exist_ok=True)
-    for env_id, folders in find_runs(args.runs).items():
-        metas = [json.loads((f / "run.json").read_text()) for f in folders]
-        rates = [evaluate(f / "model.zip", env_id, args.episodes)["success_rate"]
-                 for f in folders]
-        print(table_row(env_id, metas, rates), flush=True)
-        with_curves = [f for f in folders if (f / "evaluations.csv").is_file()]
-        if with_curves:
-            plot_curves(env_id, with_curves, args.plots / f"curve_{env_id.split('/')[-1]}.png")
+    parser.add_argument("results", type=Path, nargs="?", default=RESULTS,
+                        help="folder of result files (default agents/results)")
+    parser.add_argument("--plots", type=Path, default=Path("docs/images"),
+                        help="folder for curve_<task>.png (default docs/images)")
+    args = parser.parse_args(argv)
+    results = load_results(args.results)
+    if not results:
+        parser.error(f"no result files (*.json) in {args.results}; the runs of "
+                     "`python -m rigid_gym.agents.table` write them")
+    print(table(results))
+    for path in plot_curves(results, args.plots):
+        print(f"wrote {path}")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

@@ -35,7 +35,7 @@ from pathlib import Path
 
 import yaml
 
-from rigid_gym.agents.results import TABLE_HEADER, plot_curves, table_row
+from rigid_gym.agents.results import plot_task, table
 from rigid_gym.agents.train import train
 
 
@@ -99,7 +99,7 @@ def run_trial(config: dict) -> None:
     train(config["env_id"], seed=config["seed"], timesteps=config["steps"], out=Path.cwd(),
           eval_freq=config["eval_freq"], eval_episodes=config["eval_episodes"],
           checkpoint_freq=config["eval_freq"], overrides=config["params"], resume=resume,
-          on_checkpoint=report)
+          on_checkpoint=report, final_episodes=0)
 
 
 def trial_folder_name(trial) -> str:
@@ -168,7 +168,9 @@ def sweep(env_ids: list[str] | None = None, seeds: list[int] | None = None,
 def write_results(results, folder: Path) -> list[str]:
     """Write ``folder/results.md`` and the curves from a Tune ResultGrid of ``run_trial``s;
     returns one line per failed trial (also in results.md)."""
-    groups: dict[tuple[str, str], list[Path]] = {}
+    from rigid_gym.agents.train import curve_of, result_record
+
+    groups: dict[tuple[str, str], list[dict]] = {}
     failed = []
     for result in results:
         config = result.config
@@ -178,18 +180,16 @@ def write_results(results, folder: Path) -> list[str]:
             failed.append(f"{config['env_id']} seed {config['seed']} {label}: {error} "
                           f"({result.path})".replace("  ", " "))
             continue
-        groups.setdefault((config["env_id"], label), []).append(Path(result.checkpoint.path))
-    lines = [TABLE_HEADER]
+        run = Path(result.checkpoint.path)  # the last evaluation is the trial's result
+        record = json.loads((run / "run.json").read_text())
+        trial = result_record(record, curve_of(run), config["eval_episodes"], record)
+        trial["method"] += f" ({label})" if label else ""
+        groups.setdefault((config["env_id"], label), []).append(trial)
+    lines = [table([trial for _, runs in sorted(groups.items()) for trial in runs])]
     for (env_id, label), runs in sorted(groups.items()):
-        task = f"{env_id} ({label})" if label else env_id
-        records = [json.loads((run / "run.json").read_text()) for run in runs]
-        rates = []
-        for run in runs:
-            with open(run / "evaluations.csv") as f:
-                rates.append(float(list(csv.DictReader(f))[-1]["success_rate"]))
-        lines.append(table_row(task, records, rates))
         plot = f"curve_{env_id.split('/')[-1]}" + (f"_{label}" if label else "")
-        plot_curves(task, runs, folder / (re.sub(r"[^A-Za-z0-9=._-]+", "_", plot) + ".png"))
+        plot_task(env_id, {(env_id, runs[0]["method"]): runs},
+                  folder / (re.sub(r"[^A-Za-z0-9=._-]+", "_", plot) + ".png"))
     if failed:
         lines += ["", f"Failed trials ({len(failed)}; `rigid-gym sweep --resume {folder}` "
                   "goes on from their newest checkpoints):", ""]

@@ -1,24 +1,32 @@
-"""Train a stable-baselines3 baseline on a rigid_gym task.
+"""Train a baseline on a rigid_gym task, on SBX (JAX) where it is installed, else on
+stable-baselines3 (PyTorch) (``rigid_gym.agents.algorithms``).
 
     from rigid_gym.agents.train import train
     run = train("rigid_gym/Push-v0", seed=0)            # settings from hyperparams.yml
 
-    rigid-gym train rigid_gym/Push-v0 --seed 0 --steps 200000 --progress-bar
+    rigid-gym train rigid_gym/Push-v0 --seed 0
     rigid-gym train rigid_gym/Push-v0 --seed 0 --checkpoint-freq 10000 --resume   # after a kill
 
-A run writes one folder, ``<out>/<task>/<algo>-seed<seed>/``:
+A run writes one folder, ``<out>/<name>-<algo>-seed<seed>/`` (``run_name``: the id's name
+without its version, e.g. ``runs/Push-sac-seed0/``):
 
     model.zip           the final policy (``rigid-gym evaluate`` loads it)
-    run.json            env id, algorithm, seed, budget, settings, the command line, and after
-                        training wall_seconds and cpu_seconds (this process's CPU time);
-                        resumed_at: the env steps each resume went on from
+    run.json            env id, algorithm, learner, seed, budget, settings, the command line,
+                        and after training wall_seconds and cpu_seconds (this process's CPU
+                        time, summed over the sittings of a resumed run); resumed_at: the env
+                        steps each resume went on from
     evaluations.csv     timesteps, success_rate, mean_return, wall_seconds: deterministic
                         episodes on fixed seeds, every ``eval_freq`` steps (the learning curve)
+    result.json         the finished run's result (``RESULT_KEYS``), written last: the final
+                        evaluation (deterministic, ``final_episodes`` episodes on seeds from
+                        EVAL_SEED, apart from training's) and the curve; a copy goes to
+                        ``results`` (agents/results/ for the table) when given
     checkpoints/        step_<steps>/ every ``checkpoint_freq`` steps and at the end (if set):
-                        model.zip, run.json, evaluations.csv and the monitor files as they were
-                        then, and in the newest one the replay buffer; ``train(resume=...)``
-                        goes on from one
-    <rank>.monitor.csv  every training episode of env <rank>: return, length, is_success
+                        model.zip, run.json and evaluations.csv as they were then, and in the
+                        newest one the replay buffer; ``train(resume=...)`` goes on from one
+
+Collection runs through the batched env (``SB3VecEnv`` over ``gym.make_vec``): n_envs copies
+in one World, one solver call per vector step.
 """
 
 from __future__ import annotations
@@ -39,14 +47,25 @@ import yaml
 
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.env_util import make_vec_env
-from stable_baselines3.common.vec_env import VecCheckNan
+from stable_baselines3.common.vec_env import VecCheckNan, VecMonitor
 
 import rigid_gym  # noqa: F401  (registers the env ids)
-from rigid_gym.agents.algorithms import algorithm_class
+from rigid_gym.agents.algorithms import algorithm_class, learner_for
 from rigid_gym.agents.evaluate import success_rate
-from rigid_gym.agents.progress import note
+from rigid_gym.agents.progress import bar, note
+from rigid_gym.agents.vec_env import SB3VecEnv
 
 HYPERPARAMS = Path(__file__).with_name("hyperparams.yml")
+RESULT_KEYS = ("env_id", "algo", "seed", "env_steps", "wall_s", "cpu_s", "episodes", "success",
+               "curve", "learner", "method", "demo_env_steps", "machine")
+"""A result file's keys: env_id, algo, seed; env_steps (training, without the
+demonstrations'), wall_s and cpu_s (the run's, evaluations included, over all its sittings);
+episodes and success (the final evaluation: deterministic policy, fraction of successes);
+curve [{"env_steps", "wall_s", "success"}] (the evaluations during training, then the final
+one); and for the table: learner, method (e.g. "SAC + HER + 500 demos"), demo_env_steps,
+machine (the processor, its cores)."""
+CURVE_POINTS = 20
+"""Evaluations per run when ``eval_freq`` is not given."""
 DEMO_SEED = 2_000_000
 """Demonstration episodes use seeds DEMO_SEED + 1000 * seed + rank, apart from the training seeds
 (small) and the evaluation seeds (``EVAL_SEED`` = 1,000,000 onwards)."""
@@ -58,30 +77,78 @@ def hyperparams_table() -> dict[str, dict]:
     return yaml.safe_load(HYPERPARAMS.read_text())
 
 
-def load_hyperparams(env_id: str) -> dict:
-    """The settings for ``env_id`` from hyperparams.yml."""
+def load_hyperparams(env_id: str, algo: str | None = None) -> dict:
+    """The settings for ``env_id`` from hyperparams.yml; with ``algo`` named in the entry's
+    ``algos`` (another recipe for the same id, e.g. Stack's SAC + HER without demonstrations),
+    the entry with that recipe's keys replacing its own."""
     table = hyperparams_table()
     if env_id not in table:
         raise ValueError(f"train: no settings for {env_id!r} in {HYPERPARAMS.name}; "
                          f"known ids: {sorted(table)}")
-    return table[env_id]
+    entry = dict(table[env_id])
+    recipes = entry.pop("algos", {})
+    if algo is not None and algo != entry["algo"] and algo in recipes:
+        entry.update(recipes[algo], algo=algo)
+    return entry
+
+
+def run_name(env_id: str, algo: str, seed: int) -> str:
+    """``<name>-<algo>-seed<seed>``, name the id's without namespace and version
+    (rigid_gym/Push-v0, sac, 0 -> Push-sac-seed0): a run's folder and result file."""
+    return f"{env_id.split('/')[-1].rsplit('-v', 1)[0]}-{algo}-seed{seed}"
 
 
 def run_directory(out: Path, env_id: str, algo: str, seed: int) -> Path:
-    task = env_id.split("/")[-1]
-    return Path(out) / task / f"{algo}-seed{seed}"
+    return Path(out) / run_name(env_id, algo, seed)
+
+
+def make_env(env_id: str, n_envs: int, env_kwargs: dict | None = None):
+    """SB3's VecEnv of ``n_envs`` copies of ``env_id`` in one batched World (``SB3VecEnv``),
+    made with ``env_kwargs`` (e.g. reward_type), with episode statistics (VecMonitor) and a
+    check that fails where a NaN first appears."""
+    venv = gym.make_vec(env_id, num_envs=n_envs, **(env_kwargs or {}))
+    return VecCheckNan(VecMonitor(SB3VecEnv(venv)), raise_exception=True)
+
+
+def build_model(env_id: str, settings: dict, algo: str, learner: str, n_envs: int, seed: int,
+                overrides: dict | None = None, verbose: int = 0):
+    """A new model of ``algo`` on ``learner`` (sbx or sb3) with ``settings`` (an entry of
+    hyperparams.yml: its ``env_kwargs`` make the envs) and ``overrides`` of its arguments, on
+    ``make_env``'s envs; returns (model, env)."""
+    env = make_env(env_id, n_envs, settings.get("env_kwargs"))
+    model = algorithm_class(algo, learner)("MultiInputPolicy", env, seed=seed, verbose=verbose,
+                                           **model_kwargs(settings, algo, overrides))
+    return model, env
+
+
+def model_kwargs(settings: dict, algo: str, overrides: dict | None = None) -> dict:
+    """The algorithm's arguments: the entry's ``kwargs``, ``overrides`` replacing them, and
+    HER's replay buffer where the entry has ``her`` (off-policy only)."""
+    kwargs = {**settings.get("kwargs", {}), **(overrides or {})}
+    if algo != "ppo" and "her" in settings:
+        from stable_baselines3 import HerReplayBuffer
+        kwargs.update(replay_buffer_class=HerReplayBuffer,
+                      replay_buffer_kwargs=dict(settings["her"]))
+    return kwargs
 
 
 def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None, seed: int = 0,
-          n_envs: int | None = None, out: str | Path = "runs", eval_freq: int = 10_000,
+          n_envs: int | None = None, out: str | Path = "runs", eval_freq: int | None = None,
           eval_episodes: int = 20, checkpoint_freq: int = 0, progress_bar: bool = False,
           threads: int = 1, verbose: int = 0, overrides: dict | None = None,
           demonstrations: int | None = None, demo_dataset: str | None = None,
-          resume: str | Path | None = None, on_checkpoint: Callable[[Path], None] | None = None, progress: bool = False) -> Path:
+          resume: str | Path | None = None,
+          on_checkpoint: Callable[[Path], None] | None = None, progress: bool = False,
+          learner: str | None = None, final_episodes: int = 100,
+          results: str | Path | None = None) -> Path:
     """Train on ``env_id`` and return the run folder (see the module docstring).
 
-    algo, timesteps (env steps), n_envs: override hyperparams.yml. eval_freq: env steps between
-    evaluations of ``eval_episodes`` deterministic episodes (0: none). checkpoint_freq: env
+    algo, timesteps (env steps), n_envs: override hyperparams.yml (an ``algo`` that the
+    entry's ``algos`` names brings that recipe's settings). learner: sbx or sb3 (None: sbx
+    where installed, ``algorithms.learner_for``). eval_freq: env steps between evaluations of
+    ``eval_episodes`` deterministic episodes (None: CURVE_POINTS over the run; 0: none).
+    final_episodes: the final evaluation's episodes (0: none, and no result file); results:
+    a folder that also gets the result file, as ``<run_name>.json``. checkpoint_freq: env
     steps between checkpoints (0: none; with it, the end of training is one too). threads:
     PyTorch's CPU threads. overrides: algorithm arguments that replace those of
     hyperparams.yml (e.g. learning_starts). demonstrations: scripted episodes put in the replay
@@ -99,15 +166,19 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     """
     import torch
 
-    settings = load_hyperparams(env_id)
+    settings = load_hyperparams(env_id, algo)
     algo = algo or settings["algo"]
-    cls = algorithm_class(algo)
+    learner = learner_for(algo, learner)
+    algorithm_class(algo, learner)  # an unknown algo fails here, before anything is made
     timesteps = _count(timesteps if timesteps is not None else settings["n_timesteps"],
                        "timesteps", 1)
     n_envs = _count(n_envs if n_envs is not None else settings.get("n_envs", 1), "n_envs", 1)
     seed = _count(seed, "seed", 0)
+    if eval_freq is None:
+        eval_freq = max(1, timesteps // CURVE_POINTS)
     for name, value in (("eval_freq", eval_freq), ("eval_episodes", eval_episodes),
-                        ("checkpoint_freq", checkpoint_freq)):
+                        ("checkpoint_freq", checkpoint_freq),
+                        ("final_episodes", final_episodes)):
         _count(value, name, 0)
     torch.set_num_threads(_count(threads, "threads", 1))
     demonstrations = _count(demonstrations if demonstrations is not None
@@ -117,30 +188,30 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
 
     folder = run_directory(out, env_id, algo, seed)
     folder.mkdir(parents=True, exist_ok=True)
+    (folder / "result.json").unlink(missing_ok=True)  # a result only once the run finished
     if resume is not None:
         record = _restore_files(Path(resume), folder, env_id, algo, seed)
-    note(f"{env_id}: making {n_envs} env(s) and the {algo} model (run folder {folder})",
-         progress)
-    env = make_vec_env(env_id, n_envs=n_envs, seed=seed, monitor_dir=str(folder),
-                       monitor_kwargs={"info_keywords": ("is_success",),
-                                       "override_existing": resume is None})
-    env = VecCheckNan(env, raise_exception=True)  # a diverging network fails where it starts
+        # the checkpoint's model is of its learner, its buffer of its number of envs
+        learner, n_envs = record.get("learner", "sb3"), record["n_envs"]
+    note(f"{env_id}: making {n_envs} env(s) and the {algo} model on {learner} (run folder "
+         f"{folder})", progress)
     if resume is not None:  # the checkpoint's model, with the settings it was made with
-        model = cls.load(Path(resume) / "model.zip", env=env, device="cpu")
+        env = make_env(env_id, n_envs, record.get("env_kwargs"))
+        env.seed(seed)  # the envs start afresh, as at the run's start
+        model = algorithm_class(algo, learner).load(Path(resume) / "model.zip", env=env,
+                                                    device="cpu")
         load_buffers(model, Path(resume))
         record["resumed_at"] = record.get("resumed_at", []) + [model.num_timesteps]
         record["timesteps"] = timesteps
         (folder / "run.json").write_text(json.dumps(record, indent=2))
     else:
-        kwargs = {**settings.get("kwargs", {}), **(overrides or {})}
-        if algo != "ppo" and "her" in settings:
-            from stable_baselines3 import HerReplayBuffer
-            kwargs.update(replay_buffer_class=HerReplayBuffer,
-                          replay_buffer_kwargs=dict(settings["her"]))
-        model = cls("MultiInputPolicy", env, seed=seed, verbose=verbose, **kwargs)
+        model, env = build_model(env_id, settings, algo, learner, n_envs, seed, overrides,
+                                 verbose)
         demo = add_demonstrations(model, env_id, demonstrations, seed, progress,
-                                  demo_dataset) if demonstrations else None
-        _write_run(folder, env_id, algo, seed, timesteps, n_envs, kwargs, demo)
+                                  demo_dataset) \
+            if demonstrations else None
+        _write_run(folder, env_id, algo, learner, seed, timesteps, n_envs,
+                   model_kwargs(settings, algo, overrides), demo, settings.get("env_kwargs", {}))
 
     before = record if resume is not None else {}  # the seconds of the parts before a resume
     clock = Clock(before.get("wall_seconds", 0.0), before.get("cpu_seconds", 0.0))
@@ -161,7 +232,67 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     _write_seconds(folder, clock)
     if checkpoints and checkpoints.written != model.num_timesteps:
         checkpoints.write()  # the end of training, with its times
+    if final_episodes:
+        note(f"{env_id}: final evaluation, {final_episodes} episodes", progress)
+        final = success_rate(model, gym.make(env_id), final_episodes, progress=progress)
+        result = write_result(folder, model.num_timesteps, final, clock)
+        if results is not None:
+            Path(results).mkdir(parents=True, exist_ok=True)
+            target = Path(results) / f"{folder.name}.json"
+            target.write_text(json.dumps(result, indent=1) + "\n")
     return folder
+
+
+def machine() -> str:
+    """The processor and its core count, as the results table names the machine."""
+    import os
+    import platform
+
+    name = platform.processor() or platform.machine()
+    cpuinfo = Path("/proc/cpuinfo")
+    if cpuinfo.is_file():
+        for line in cpuinfo.read_text().splitlines():
+            if line.startswith("model name"):
+                name = line.split(":", 1)[1].strip()
+                break
+    return f"{name}, {os.cpu_count()} cores"
+
+
+def curve_of(folder: Path) -> list[dict]:
+    """A run folder's (or checkpoint's) evaluations.csv as a result's curve: [{"env_steps",
+    "wall_s", "success"}] ([] without the file)."""
+    if not (folder / "evaluations.csv").is_file():
+        return []
+    with open(folder / "evaluations.csv") as f:
+        return [{"env_steps": int(r["timesteps"]), "wall_s": float(r["wall_seconds"]),
+                 "success": float(r["success_rate"])} for r in csv.DictReader(f)]
+
+
+def result_record(record: dict, curve: list[dict], episodes: int, seconds: dict) -> dict:
+    """A result (RESULT_KEYS) from a run.json ``record``, its ``curve`` (the last point the
+    final evaluation, of ``episodes`` episodes) and its ``seconds`` (``Clock.seconds``)."""
+    from rigid_gym.agents.results import method
+
+    demo = record.get("demonstrations") or {}
+    return {"env_id": record["env_id"], "algo": record["algo"], "seed": record["seed"],
+            "env_steps": curve[-1]["env_steps"], "wall_s": seconds["wall_seconds"],
+            "cpu_s": seconds.get("cpu_seconds", 0.0), "episodes": episodes,
+            "success": curve[-1]["success"], "curve": curve,
+            "learner": record.get("learner", "sb3"), "method": method(record),
+            "demo_env_steps": demo.get("env_steps", 0), "machine": machine()}
+
+
+def write_result(folder: Path, env_steps: int, final: dict, clock: Clock) -> dict:
+    """Write the finished run's ``result.json`` (RESULT_KEYS) from its run.json, its
+    evaluations.csv and the final evaluation ``final`` (``success_rate``'s dict), last on the
+    curve; returns it."""
+    record = json.loads((folder / "run.json").read_text())
+    seconds = clock.seconds()
+    curve = curve_of(folder) + [{"env_steps": env_steps, "wall_s": seconds["wall_seconds"],
+                                 "success": final["success_rate"]}]
+    result = result_record(record, curve, final["episodes"], seconds)
+    (folder / "result.json").write_text(json.dumps(result, indent=1) + "\n")
+    return result
 
 
 class Clock:
@@ -280,9 +411,11 @@ def fill_replay_buffer(model, dataset, env_id: str, episodes: int) -> dict:
             "success_rate": datasets.success_rate(used)}
 
 
-def _write_run(folder: Path, env_id, algo, seed, timesteps, n_envs, kwargs, demo) -> None:
+def _write_run(folder: Path, env_id, algo, learner, seed, timesteps, n_envs, kwargs, demo,
+               env_kwargs) -> None:
     record = {
-        "env_id": env_id, "algo": algo, "seed": seed, "timesteps": timesteps,
+        "env_id": env_id, "algo": algo, "learner": learner, "seed": seed, "timesteps": timesteps,
+        "env_kwargs": env_kwargs,
         "n_envs": n_envs, "demonstrations": demo, "command": " ".join(sys.argv),
         "kwargs": {k: v if isinstance(v, (int, float, str, dict, list)) else repr(v)
                    for k, v in kwargs.items()},
@@ -346,7 +479,7 @@ class SuccessEvaluation(EveryNSteps):
         self.logger.record("eval/success_rate", result["success_rate"])
 
 
-CHECKPOINT_FILES = ("run.json", "evaluations.csv", "*.monitor.csv")
+CHECKPOINT_FILES = ("run.json", "evaluations.csv")
 """The run folder's files that a checkpoint copies, as they were at its step."""
 
 

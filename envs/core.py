@@ -211,6 +211,7 @@ class TaskBatch:
         if not finite:  # a solver failure: say so here, not in a network
             self.refuse_non_finite(vectors, worlds)
         achieved = vectors[:, self.achieved_columns].astype(np.float32)
+        pad = vectors[:, :3].copy()  # the true pad position (before any observation noise)
         noise = self.options.observation_noise
         if noise > 0.0:
             rngs = [self.rngs[i] for i in worlds.tolist()]
@@ -221,6 +222,11 @@ class TaskBatch:
         successes = self.task.goal_reached(achieved64, desired64)
         if self.options.reward_type == "sparse":
             rewards = successes - 1.0  # the sparse reward, from the test just made
+        elif self.options.reward_type == "shaped":
+            held = self.gripper.held[copies] if self.task.has_grip \
+                else np.full(len(worlds), -1, dtype=np.int64)
+            rewards = np.where(successes, 1.0, self.task.shaped_reward(
+                pad, held, achieved64, desired64, self.half[copies]))
         else:
             rewards = self.task.reward(achieved64, desired64, "dense")
         observations = {"observation": vectors.astype(np.float32), "achieved_goal": achieved,
@@ -246,7 +252,12 @@ class TaskBatch:
 
     def compute_reward(self, achieved_goal, desired_goal) -> np.ndarray:
         """The reward of goals of shape (..., goal_size) -> (...) float64 (``Task.reward``
-        with the options' reward type)."""
+        with the options' reward type); the shaped reward reads more than the goals, so it has
+        none (a ValueError)."""
+        if self.options.reward_type == "shaped":
+            raise ValueError(f"{self.name}.compute_reward: the shaped reward reads the pad and "
+                             "the grip as well as the goals, so it cannot be recomputed from "
+                             "goals (as HER does); use reward_type 'sparse' or 'dense' there")
         return self.task.reward(np.asarray(achieved_goal, dtype=np.float64),
                                 np.asarray(desired_goal, dtype=np.float64),
                                 self.options.reward_type)

@@ -13,6 +13,10 @@ from gymnasium import spaces
 from rigid_gym.envs.pixels import DEFAULT_SIZE, PixelOptions
 
 RENDER_MODES = ("rgb_array", "human")
+REWARD_TYPES = ("sparse", "dense", "shaped")
+"""sparse -1 / 0 and dense -distance (Fetch's and panda-gym's, goals only: HER recomputes
+them); shaped: staged by the task's phases (``Task.shaped_reward``), in [0, 1], reading the
+pad and the grip as well as the goals."""
 RANDOMIZATION = {
     "mass": (0.5, 2.0),
     "friction": (0.5, 1.5),
@@ -26,7 +30,7 @@ friction (one factor per body), ``restitution`` is each cube's coefficient."""
 ARGUMENTS_TABLE = """| argument | default | meaning |
     |---|---|---|
     | render_mode | None | "rgb_array" (480 x 480 frames, no display needed) or "human" (rerun viewer) |
-    | reward_type | "sparse" | "sparse" or "dense" (the ``Dense`` ids) |
+    | reward_type | "sparse" | "sparse", "dense" (the ``Dense`` ids) or "shaped" (staged, for on-policy learners) |
     | terminate_on_success | False | end the episode when the goal is reached |
     | randomize | False | True, or a dict of ranges, to redraw cube mass, size, restitution and friction each reset (``rigid_gym.envs.options.RANDOMIZATION``) |
     | observation_noise | 0.0 | standard deviation of Gaussian noise on ``observation`` |
@@ -40,7 +44,7 @@ ARGUMENTS_TABLE = """| argument | default | meaning |
 @dataclass(frozen=True)
 class Options:
     """A task's arguments, checked (``Options.checked``): render_mode (None or one of
-    RENDER_MODES), reward_type ("sparse" or "dense"), terminate_on_success,
+    RENDER_MODES), reward_type (one of REWARD_TYPES), terminate_on_success,
     randomization ({name: (low, high)}, the ranges in use: ``randomize`` resolved),
     observation_noise (standard deviation, >= 0) and pixels (obs_mode and the frames'
     settings, ``rigid_gym.envs.pixels.PixelOptions``)."""
@@ -63,8 +67,8 @@ class Options:
         if render_mode is not None and render_mode not in RENDER_MODES:
             raise ValueError(f"{where}: render_mode must be None or one of "
                              f"{list(RENDER_MODES)}, got {render_mode!r}")
-        if reward_type not in ("sparse", "dense"):
-            raise ValueError(f"{where}: reward_type must be 'sparse' or 'dense', "
+        if reward_type not in REWARD_TYPES:
+            raise ValueError(f"{where}: reward_type must be one of {list(REWARD_TYPES)}, "
                              f"got {reward_type!r}")
         if not isinstance(terminate_on_success, bool):
             raise ValueError(f"{where}: terminate_on_success must be a bool, "

@@ -9,13 +9,18 @@ import numpy as np
 from rigid_gym.meshes import prism_mesh
 from rigid_gym.recordable import Marker
 from rigid_gym.envs.base import RigidGymEnv
-from rigid_gym.envs.task import (DISTANCE_THRESHOLD, GOAL_COLOR, MARKER_ALPHA, Task, cube_anywhere,
-                                 distance, sample_apart)
+from rigid_gym.envs.effector import PAD_HALF_EXTENTS
+from rigid_gym.envs.task import (DISTANCE_THRESHOLD, GOAL_COLOR, MARKER_ALPHA, Task, closeness,
+                                 cube_anywhere, distance, sample_apart, staged)
 
 OBJECT_RANGE = 0.15
 """m: the cube starts at x, y uniform in [-0.15, 0.15] (panda-gym's and Fetch's range)."""
 GOAL_RANGE = 0.15
 """m: the target is at x, y uniform in [-0.15, 0.15], on the table."""
+PUSH_GAP = 0.005
+"""m: the shaped reward's push point lies this far behind the cube's face."""
+PUSHING = 0.03
+"""m: the shaped reward counts the pad as pushing within this distance of the push point."""
 
 
 class Push(Task):
@@ -39,6 +44,23 @@ class Push(Task):
 
     def markers(self, goal, half):
         return [Marker(success_zone(), (goal[0], goal[1], 0.0), GOAL_COLOR, MARKER_ALPHA)]
+
+    def shaped_reward(self, pad, held, achieved_goal, desired_goal, half):
+        point = push_point(achieved_goal, desired_goal, half[:, 0])
+        near = distance(pad - point)
+        return staged(closeness(pad - point), near < PUSHING,
+                      closeness(achieved_goal - desired_goal)) / 3.0
+
+
+def push_point(cube: np.ndarray, target: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """Where the pad's centre pushes the cube at ``cube`` (k, 3) m, of half edge ``half`` (k,)
+    m, towards ``target`` (k, 3) m: behind the cube on the line from the target through it,
+    the pad's half width and PUSH_GAP beyond its face, at the cube's height -> (k, 3) m."""
+    away = cube[:, :2] - target[:, :2]
+    length = np.maximum(distance(away), 1e-9)[:, None]
+    point = cube.copy()
+    point[:, :2] += away / length * (half + PAD_HALF_EXTENTS[0] + PUSH_GAP)[:, None]
+    return point
 
 
 class PushEnv(RigidGymEnv):
@@ -68,6 +90,10 @@ class PushEnv(RigidGymEnv):
     ## Rewards
     sparse (``reward_type="sparse"``, the default): 0 when the cube's centre is within 0.05 m
     of the target, else -1. dense: minus the distance, m. ``compute_reward`` takes batches.
+    shaped (for on-policy learners; staged as ManiSkill's dense rewards), in [0, 1]: reach,
+    1 - tanh(5 d) of the pad's distance d to the push point (``push_point``: behind the cube,
+    away from the target), until the pad is within 0.03 m of it; then push, 2 + (1 - tanh(5 d))
+    of the cube's distance d to the target; divided by 3; 1 when the goal is reached.
 
     ## Starting state
     Cube at x, y uniform in [-0.15, 0.15] m, resting on the table, unrotated; target x, y in

@@ -8,8 +8,8 @@ from rigid_gym.recordable import Marker
 from rigid_gym.render import DYNAMIC_PALETTE
 from rigid_gym.shapes import Box
 from rigid_gym.envs.base import RigidGymEnv
-from rigid_gym.envs.task import (CUBE_HALF, DISTANCE_THRESHOLD, MARKER_ALPHA, Task, distance,
-                                 sample_apart)
+from rigid_gym.envs.task import (CUBE_HALF, DISTANCE_THRESHOLD, MARKER_ALPHA, Task, closeness,
+                                 distance, sample_apart, staged)
 
 OBJECT_RANGE = 0.15
 """m: each cube starts at x, y uniform in [-0.15, 0.15]."""
@@ -62,6 +62,15 @@ class Stack(Task):
         return [Marker(Box((h, h, h)), tuple(goal[3 * k:3 * k + 3]), color, MARKER_ALPHA)
                 for k, (h, color) in enumerate(zip(half.tolist(), DYNAMIC_PALETTE))]
 
+    def shaped_reward(self, pad, held, achieved_goal, desired_goal, half):
+        def carry(k):  # cube k's stages: reach it, hold it (or it lies at its target), carry it
+            cube, target = achieved_goal[:, 3 * k:3 * k + 3], desired_goal[:, 3 * k:3 * k + 3]
+            placed = distance(cube - target) < DISTANCE_THRESHOLD
+            return staged(closeness(pad - cube), (held == k) | placed, closeness(cube - target))
+
+        bottom_placed = distance(achieved_goal[:, :3] - desired_goal[:, :3]) < DISTANCE_THRESHOLD
+        return np.where(bottom_placed, 3.0 + carry(1), carry(0)) / 6.0
+
 
 class StackEnv(RigidGymEnv):
     """Stack two 4 cm cubes into a tower at a target: cube 0 on the table, cube 1 on cube 0.
@@ -90,8 +99,13 @@ class StackEnv(RigidGymEnv):
     placed relative to each other as the targets are: cube 1's offset from cube 0 is within half
     an edge (0.02 m) of the targets' offset in x, y and within a quarter edge (0.01 m) in z. For
     the env's targets (a tower) that means cube 1 rests on cube 0. Both tests read only the
-    goals, so HER can recompute them, also for goals relabelled from where the cubes lay. sparse: 0 when reached, else -1; dense: minus the distance between
-    the 6-vectors, m.
+    goals, so HER can recompute them, also for goals relabelled from where the cubes lay.
+    sparse: 0 when reached, else -1; dense: minus the distance between the 6-vectors, m.
+    shaped (for on-policy learners; staged as ManiSkill's dense rewards), in [0, 1]: cube 0's
+    stages until it lies within 0.05 m of its target, then 3 + cube 1's; a cube's stages are
+    reach, 1 - tanh(5 d) of the pad's distance to it, until the pad holds it (or it lies within
+    0.05 m of its target: letting go there keeps the stage), then carry, 2 + (1 - tanh(5 d)) of
+    its distance to its target; divided by 6; 1 when reached.
 
     ## Starting state
     Cubes at x, y uniform in [-0.15, 0.15] m, at least 0.08 m apart, resting, unrotated; the

@@ -97,6 +97,34 @@ class Task:
         return self.goal_reached(achieved_goal, desired_goal) - 1.0
 
 
+    def shaped_reward(self, pad: np.ndarray, held: np.ndarray, achieved_goal: np.ndarray,
+                      desired_goal: np.ndarray, half: np.ndarray) -> np.ndarray:
+        """The shaped reward (``reward_type="shaped"``) of copies whose pad is at ``pad``
+        (k, 3) m, holding cube ``held`` (k,) (-1: none), with goals (k, goal_size) m and cube
+        half edges ``half`` (k, cubes) m -> (k,) in [0, 1) (the env gives 1 where the goal is
+        reached). Staged as ManiSkill's dense rewards: see ``staged``."""
+        raise NotImplementedError
+
+
+SHAPED_SCALE = 5.0
+"""1/m: a shaped stage's closeness is 1 - tanh(SHAPED_SCALE * distance) (ManiSkill's)."""
+
+
+def closeness(offset: np.ndarray, scale: float = SHAPED_SCALE) -> np.ndarray:
+    """1 - tanh(scale * |offset|) of offsets (..., 3) m -> (...) in (0, 1]: 1 at zero
+    distance, falling with it."""
+    return 1.0 - np.tanh(scale * distance(offset))
+
+
+def staged(reach: np.ndarray, engaged: np.ndarray, place: np.ndarray) -> np.ndarray:
+    """One object's stages -> (k,) in [0, 3]: ``reach`` (k,) in [0, 1] (the pad's closeness
+    to where it acts on the object) until ``engaged`` (k,) bool (the pad acts on it: pushing
+    it, holding it, or it is in flight), then 2 + ``place`` (k,) in [0, 1] (the object's
+    closeness to its target). A stage passed is worth more than any value of the one before,
+    and once engaged the reward only grows as the object nears its target."""
+    return np.where(engaged, 2.0 + place, reach)
+
+
 def distance(offset: np.ndarray) -> np.ndarray:
     """Euclidean length of ``offset`` (..., d) along its last axis -> (...): the bits of
     ``np.linalg.norm(offset, axis=-1)`` without its argument handling (a few microseconds,

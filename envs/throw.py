@@ -9,7 +9,8 @@ import numpy as np
 from rigid_gym.recordable import Marker
 from rigid_gym.shapes import Box, Compound, Pose, Sphere
 from rigid_gym.envs.base import RigidGymEnv
-from rigid_gym.envs.task import GOAL_COLOR, MARKER_ALPHA, Task, cube_anywhere
+from rigid_gym.envs.task import (GOAL_COLOR, MARKER_ALPHA, Task, closeness, cube_anywhere,
+                                 staged)
 
 OBJECT_RANGE = 0.1
 """m: the cube starts at x, y uniform in [-0.1, 0.1]."""
@@ -24,6 +25,11 @@ BIN_WALL = (0.005, 0.04)
 IN_BIN_HEIGHT = 0.05
 """m: the cube counts as in the bin up to this far above its resting height there."""
 BIN_FRICTION = 0.5
+THROW_SCALE = 2.0
+"""1/m: the shaped reward's closeness of the cube to the bin, 1 - tanh(2 d): the bin is 0.25
+to 0.65 m away, where tanh(5 d) has no slope left."""
+IN_FLIGHT = 0.01
+"""m: a cube not held and this far above its resting height counts as thrown (in flight)."""
 
 
 @functools.cache
@@ -78,6 +84,11 @@ class Throw(Task):
     def markers(self, goal, half):
         return [Marker(Sphere(0.015), tuple(goal), GOAL_COLOR, MARKER_ALPHA)]
 
+    def shaped_reward(self, pad, held, achieved_goal, desired_goal, half):
+        flying = achieved_goal[:, 2] > half[:, 0] + IN_FLIGHT
+        return staged(closeness(pad - achieved_goal), (held == 0) | flying,
+                      closeness(achieved_goal - desired_goal, THROW_SCALE)) / 3.0
+
 
 class ThrowEnv(RigidGymEnv):
     """Throw a 4 cm cube into a bin placed beyond the gripper's reach.
@@ -116,7 +127,10 @@ class ThrowEnv(RigidGymEnv):
     ## Rewards
     The goal is reached when the cube is in the bin: its centre within 0.08 m (the bin's
     inside half width) of the goal in x and in y, and within 0.05 m in z. sparse: 0 when
-    reached, else -1; dense: minus the distance, m.
+    reached, else -1; dense: minus the distance, m. shaped (for on-policy learners; staged as
+    ManiSkill's dense rewards), in [0, 1]: reach, 1 - tanh(5 d) of the pad's distance to the
+    cube, until the pad holds it or it flies (released, 0.01 m above resting); then
+    2 + (1 - tanh(2 d)) of the cube's distance to the goal; divided by 3; 1 when in the bin.
 
     ## Starting state
     Cube at x, y uniform in [-0.1, 0.1] m, resting; bin centre x in [0.5, 0.65] m, y in

@@ -4,8 +4,9 @@
     rigid-gym record ENV_ID [--policy random|scripted|MODEL.zip] [--algo NAME] [--episodes N]
                      [--seed S] [--out DIR] [--run NAME] [--contacts]
     rigid-gym replay FILE [FILE ...]
-    rigid-gym train ENV_ID [--algo sac|tqc|ppo] [--steps N] [--seed S] [--n-envs N] [--out DIR]
-                    [--eval-freq N] [--eval-episodes N] [--checkpoint-freq N] [--resume]
+    rigid-gym train ENV_ID [--algo sac|tqc|ppo|bc_sac] [--learner auto|sbx|sb3] [--steps N]
+                    [--seed S] [--n-envs N] [--out DIR] [--eval-freq N] [--eval-episodes N]
+                    [--final-episodes N] [--results DIR] [--checkpoint-freq N] [--resume]
                     [--demos N] [--demo-dataset ID] [--progress-bar]
     rigid-gym sweep ENV_ID [ENV_ID ...] --seeds S [S ...] [--param KEY=V1,V2 ...] [--steps N]
                     [--out DIR] [--name NAME] [--eval-freq N] [--eval-episodes N]
@@ -181,14 +182,20 @@ def train(args) -> int:
     folder = run_training(args.env_id, algo=args.algo, timesteps=args.steps, seed=args.seed,
                           n_envs=args.n_envs, out=args.out, eval_freq=args.eval_freq,
                           eval_episodes=args.eval_episodes,
-                          checkpoint_freq=args.checkpoint_freq, progress_bar=args.progress_bar,
+                          checkpoint_freq=args.checkpoint_freq,
+                          progress_bar=args.progress_bar and sys.stdout.isatty(),
                           demonstrations=args.demos, demo_dataset=args.demo_dataset,
-                          resume=resume, progress=True)
+                          resume=resume, progress=True,
+                          learner=None if args.learner == "auto" else args.learner,
+                          final_episodes=args.final_episodes, results=args.results)
     print(f"trained {args.env_id}: {folder / 'model.zip'}")
-    if args.eval_freq:
-        last = (folder / "evaluations.csv").read_text().strip().splitlines()[-1].split(",")
-        print(f"final evaluation ({args.eval_episodes} episodes): success rate "
-              f"{float(last[1]):.0%}, mean return {float(last[2]):.1f}")
+    if args.final_episodes:
+        import json
+
+        result = json.loads((folder / "result.json").read_text())
+        print(f"final evaluation ({result['episodes']} episodes): success rate "
+              f"{result['success']:.0%}; {result['env_steps']:,} env steps in "
+              f"{result['wall_s']:.0f} s wall, {result['cpu_s']:.0f} s CPU ({result['learner']})")
     return 0
 
 
@@ -353,17 +360,27 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("files", nargs="+", metavar="FILE", help=".rrd file(s)")
     p = commands.add_parser("train", help="train a stable-baselines3 baseline on an env")
     p.add_argument("env_id", type=env_id, help="e.g. rigid_gym/Push-v0")
-    p.add_argument("--algo", choices=("sac", "tqc", "ppo"), default=None,
-                   help="default: the env's entry in agents/hyperparams.yml")
+    p.add_argument("--algo", choices=("sac", "tqc", "ppo", "bc_sac"), default=None,
+                   help="default: the env's entry in agents/hyperparams.yml (another recipe of "
+                        "the entry's `algos` brings its settings)")
+    p.add_argument("--learner", choices=("auto", "sbx", "sb3"), default="auto",
+                   help="sbx (JAX, the `fast` extra) or sb3 (PyTorch); auto: sbx where "
+                        "installed (ppo trains on sb3)")
     p.add_argument("--steps", type=bounded(int, 1, 10**9), default=None,
                    help="env steps, 1 to 1e9 (default: hyperparams.yml)")
     p.add_argument("--seed", type=bounded(int, 0, 2**32 - 1), default=0)
     p.add_argument("--n-envs", type=bounded(int, 1, 1024), default=None,
                    help="envs stepped together, 1 to 1024 (default: hyperparams.yml)")
     p.add_argument("--out", default="runs", help="runs folder (default runs)")
-    p.add_argument("--eval-freq", type=bounded(int, 0, 10**9), default=10_000,
-                   help="env steps between evaluations (0: none; default 10000)")
+    p.add_argument("--eval-freq", type=bounded(int, 0, 10**9), default=None,
+                   help="env steps between evaluations (0: none; default: 20 over the run)")
     p.add_argument("--eval-episodes", type=bounded(int, 1, 10**4), default=20)
+    p.add_argument("--final-episodes", type=bounded(int, 0, 10**5), default=100,
+                   help="episodes of the final evaluation, written to the run's result.json "
+                        "(0: none; default 100)")
+    p.add_argument("--results", default=None, metavar="DIR",
+                   help="also copy the result to DIR/<name>-<algo>-seed<k>.json (the results "
+                        "table reads agents/results)")
     p.add_argument("--checkpoint-freq", type=bounded(int, 0, 10**9), default=0,
                    help="env steps between checkpoints (0: none)")
     p.add_argument("--demos", type=bounded(int, 0, 10**6), default=None,

@@ -2,14 +2,18 @@
 
 import csv
 import json
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
 
 from rigid_gym.agents.evaluate import evaluate, load_model
-from rigid_gym.agents.train import DEMO_SEED, add_demonstrations, load_hyperparams, train
+from rigid_gym.agents.train import (DEMO_SEED, RESULT_KEYS, add_demonstrations, load_hyperparams,
+                                    train)
 from rigid_gym.envs.scripted import scripted_policy
+
+COMMITTED = Path(__file__).resolve().parent.parent / "agents" / "models"
 
 
 @pytest.mark.parametrize("env_id", ["rigid_gym/Push-v0", "rigid_gym/Stack-v0",
@@ -24,7 +28,7 @@ def test_a_short_run_trains_saves_and_evaluates(env_id, tmp_path):
     demos = 1 if settings.get("demonstrations") else 0  # one, not hyperparams.yml's hundreds
     folder = train(env_id, timesteps=steps, n_envs=2 if settings["algo"] == "ppo" else 1,
                    out=tmp_path, eval_freq=steps // 2, eval_episodes=1, overrides=small,
-                   demonstrations=demos)
+                   demonstrations=demos, final_episodes=2, results=tmp_path / "results")
     run = json.loads((folder / "run.json").read_text())
     assert run["env_id"] == env_id and run["algo"] == settings["algo"]
     assert (run["demonstrations"] or {"episodes": 0})["episodes"] == demos
@@ -36,6 +40,15 @@ def test_a_short_run_trains_saves_and_evaluates(env_id, tmp_path):
     result = evaluate(folder / "model.zip", episodes=1)
     assert result["env_id"] == env_id and result["episodes"] == 1
     assert load_model(folder / "model.zip", gym.make(env_id)).num_timesteps == steps
+    # the result file: the keys the table reads, the curve ending in the final evaluation
+    saved = json.loads((tmp_path / "results" / f"{folder.name}.json").read_text())
+    assert saved == json.loads((folder / "result.json").read_text())
+    assert tuple(saved) == RESULT_KEYS
+    assert (saved["env_id"], saved["algo"], saved["env_steps"], saved["episodes"]) == (
+        env_id, settings["algo"], steps, 2)
+    assert [p["env_steps"] for p in saved["curve"]] == [steps // 2, steps, steps]
+    assert saved["curve"][-1]["success"] == saved["success"]
+    assert saved["wall_s"] >= saved["curve"][-2]["wall_s"] > 0 and saved["cpu_s"] > 0
 
 
 def test_demonstrations_are_stored_as_the_scripted_policy_played_them():
@@ -80,40 +93,66 @@ def test_bad_arguments_are_refused(tmp_path):
         evaluate(tmp_path / "missing.zip", env_id="rigid_gym/Push-v0")
 
 
-def test_learning_curves_are_grouped_by_env_and_drawn(tmp_path):
-    from rigid_gym.agents.results import find_runs, learning_curve, plot_curves
-
-    for seed, rates in ((0, "0.0 0.5 0.9"), (1, "0.1 0.4 1.0")):
-        folder = tmp_path / "Push-v0" / f"sac-seed{seed}"
-        folder.mkdir(parents=True)
-        (folder / "run.json").write_text(json.dumps({"env_id": "rigid_gym/Push-v0",
-                                                     "algo": "sac", "kwargs": {}}))
-        (folder / "model.zip").write_bytes(b"")
-        rows = "\n".join(f"{10 * (k + 1)},{r},-1.0,1.0" for k, r in enumerate(rates.split()))
-        (folder / "evaluations.csv").write_text(
-            "timesteps,success_rate,mean_return,wall_seconds\n" + rows + "\n")
-    runs = find_runs(tmp_path)
-    assert list(runs) == ["rigid_gym/Push-v0"] and len(runs["rigid_gym/Push-v0"]) == 2
-    steps, rates = learning_curve(runs["rigid_gym/Push-v0"][1])
-    assert steps.tolist() == [10, 20, 30] and rates.tolist() == [0.1, 0.4, 1.0]
-    plot_curves("rigid_gym/Push-v0", runs["rigid_gym/Push-v0"], tmp_path / "curve.png")
-    assert (tmp_path / "curve.png").stat().st_size > 10_000
+def synthetic_result(env_id, algo, method, seed, success, wall_s, steps=40_000, demo=0):
+    curve = [{"env_steps": steps * k // 10, "wall_s": wall_s * k / 10, "success": success * k / 10}
+             for k in range(1, 11)]
+    return {"env_id": env_id, "algo": algo, "seed": seed, "env_steps": steps, "wall_s": wall_s,
+            "cpu_s": 0.9 * wall_s, "episodes": 100, "success": success, "curve": curve,
+            "learner": "sbx", "method": method, "demo_env_steps": demo,
+            "machine": "Test CPU, 2 cores"}
 
 
-def test_the_table_names_the_method_and_counts_demonstration_steps():
-    from rigid_gym.agents.results import env_steps, method, minutes
+def test_the_results_table_and_curves_come_from_the_result_files(tmp_path):
+    from rigid_gym.agents.results import main
+
+    folder = tmp_path / "results"
+    folder.mkdir()
+    runs = [synthetic_result("rigid_gym/Push-v0", "sac", "SAC + HER", s, r, w)
+            for s, r, w in ((0, 0.96, 300.0), (1, 0.90, 420.0), (2, 0.99, 360.0))]
+    runs.append(synthetic_result("rigid_gym/Stack-v0", "bc_sac", "BC_SAC + HER + 500 demos", 0,
+                                 0.8, 30.0, demo=50_000))
+    for run in runs:
+        (folder / f"{run['env_id'][10:-3]}-{run['algo']}-seed{run['seed']}.json").write_text(
+            json.dumps(run))
+    out = tmp_path / "out.txt"
+    import contextlib
+    with open(out, "w") as f, contextlib.redirect_stdout(f):
+        assert main([str(folder), "--plots", str(tmp_path / "plots")]) == 0
+    lines = out.read_text().splitlines()
+    push = next(line for line in lines if line.startswith("| rigid_gym/Push-v0"))
+    # mean 95%, population std 3.7% (rounds to 4%), wall 6.0 min mean (5.0 to 7.0)
+    assert push == ("| rigid_gym/Push-v0 | SAC + HER | sbx | 40k | 6.0 min (5.0 min-7.0 min) | "
+                    "5.4 min (4.5 min-6.3 min) | 3 | **95%** ± 4% (96%, 90%, 99%) |")
+    stack = next(line for line in lines if line.startswith("| rigid_gym/Stack-v0"))
+    assert "| 40k + 50k demo | 30 s | 27 s | 1 | **80%** ± 0% (80%) |" in stack
+    assert any("Machine: Test CPU, 2 cores" in line for line in lines)
+    for task in ("Push", "Stack"):
+        assert (tmp_path / "plots" / f"curve_{task}.png").stat().st_size > 10_000
+
+
+def test_the_curves_average_seeds_on_a_common_axis():
+    from rigid_gym.agents.results import band
+
+    runs = [synthetic_result("rigid_gym/Push-v0", "sac", "SAC", s, r, w)
+            for s, r, w in ((0, 1.0, 100.0), (1, 0.5, 200.0))]
+    x, mean, low, high = band(runs, "wall_s", points=11)
+    assert x[0] == 10.0 and x[-1] == 100.0  # up to the shorter run's end
+    # at 100 s run 0 is at 1.0, run 1 (half as fast, half the rate) at 0.5 * 0.5
+    assert (mean[-1], low[-1], high[-1]) == (0.625, 0.25, 1.0)
+    x, mean, _, _ = band(runs, "env_steps", points=10)
+    np.testing.assert_allclose(mean, 0.75 * np.arange(1, 11) / 10)
+
+
+def test_the_table_names_the_method():
+    from rigid_gym.agents.results import method
 
     run = {"algo": "sac", "timesteps": 150_000, "demonstrations": None,
            "kwargs": {"replay_buffer_class": "<class '...her_replay_buffer.HerReplayBuffer'>"}}
-    assert (method(run), env_steps(run)) == ("SAC + HER", "150,000")
+    assert method(run) == "SAC + HER"
     run["demonstrations"] = {"episodes": 100, "env_steps": 5000, "success_rate": 1.0}
-    assert (method(run), env_steps(run)) == ("SAC + HER + 100 demos", "150,000 + 5,000 demo")
-    assert method({"algo": "ppo", "kwargs": {}}) == "PPO"
-    runs = [{"cpu_seconds": 600.0}, {"cpu_seconds": 1200.0}, {}]
-    assert minutes(runs[:2], "cpu_seconds") == "15 min"
-    assert minutes(runs, "cpu_seconds") == "15 min (2 of 3 runs)"
-    assert minutes(runs[2:], "cpu_seconds") == "—"
-    assert minutes([{"wall_seconds": 12.4}], "wall_seconds") == "12 s"
+    assert method(run) == "SAC + HER + 100 demos"
+    assert method({"algo": "ppo", "kwargs": {}, "env_kwargs": {"reward_type": "shaped"}}) == \
+        "PPO, shaped reward"
 
 
 def test_bc_sac_keeps_the_demonstrations_apart_and_clones_them():
@@ -159,7 +198,7 @@ def test_a_run_resumes_from_its_newest_checkpoint(tmp_path):
     seen = []
     folder = train("rigid_gym/Stack-v0", timesteps=200, out=tmp_path, eval_freq=100,
                    eval_episodes=1, checkpoint_freq=100, overrides=small, demonstrations=1,
-                   on_checkpoint=seen.append)
+                   on_checkpoint=seen.append, n_envs=1, final_episodes=1)
     assert [p.name for p in seen] == ["step_100", "step_200"]
     assert latest_checkpoint(folder) == seen[-1]
     # only the newest checkpoint keeps the buffers: 100 demo + 200 run transitions in it
@@ -175,7 +214,7 @@ def test_a_run_resumes_from_its_newest_checkpoint(tmp_path):
     with open(folder / "evaluations.csv", "a") as f:
         f.write("250,0.0,-100.0,9.9\n")
     train("rigid_gym/Stack-v0", timesteps=300, out=tmp_path, eval_freq=100, eval_episodes=1,
-          checkpoint_freq=100, resume=latest_checkpoint(folder))
+          checkpoint_freq=100, resume=latest_checkpoint(folder), final_episodes=1)
     with open(folder / "evaluations.csv") as f:
         assert [int(r["timesteps"]) for r in csv.DictReader(f)] == [100, 200, 300]
     run = json.loads((folder / "run.json").read_text())
@@ -278,3 +317,109 @@ def test_demonstrations_from_a_named_dataset(tmp_path, monkeypatch):
         add_demonstrations(model, "rigid_gym/Throw-v0", 4, 0, dataset="rigid_gym/throw/demo-test-v0")
     with pytest.raises(ValueError, match="demonstrations of rigid_gym/Push-v0 wanted"):
         add_demonstrations(model, "rigid_gym/Push-v0", 1, 0, dataset="rigid_gym/throw/demo-test-v0")
+
+
+def test_a_killed_run_resumes_and_its_result_has_the_whole_curve(tmp_path):
+    """A run stopped after a checkpoint leaves no result file; the table's next sitting goes
+    on from the checkpoint to the same budget, the curve and the seconds going on."""
+    from rigid_gym.agents.table import main as table
+    from rigid_gym.agents.train import latest_checkpoint
+
+    class Killed(Exception):
+        pass
+
+    def kill_at_200(folder):
+        if folder.name == "step_200":
+            raise Killed
+
+    small = {"learning_starts": 60, "batch_size": 32}
+    runs, results = tmp_path / "runs", tmp_path / "results"
+    with pytest.raises(Killed):
+        train("rigid_gym/Push-v0", timesteps=400, out=runs, eval_freq=40, eval_episodes=1,
+              checkpoint_freq=100, overrides=small, on_checkpoint=kill_at_200,
+              results=results, final_episodes=3, n_envs=1)
+    folder = runs / "Push-sac-seed0"
+    assert not (folder / "result.json").exists() and not results.exists()
+    spent = json.loads((latest_checkpoint(folder) / "run.json").read_text())["wall_seconds"]
+    # the queue's plan sees it unfinished, then resumes it (here in this process)
+    train("rigid_gym/Push-v0", timesteps=400, out=runs, eval_freq=40, eval_episodes=1,
+          checkpoint_freq=100, resume=latest_checkpoint(folder), results=results,
+          final_episodes=3)
+    result = json.loads((results / "Push-sac-seed0.json").read_text())
+    assert [p["env_steps"] for p in result["curve"]] == [40 * k for k in range(1, 11)] + [400]
+    walls = [p["wall_s"] for p in result["curve"]]
+    assert walls == sorted(walls) and result["wall_s"] > spent
+    assert json.loads((folder / "run.json").read_text())["resumed_at"] == [200]
+    assert table(["--tasks", "push", "--algos", "sac", "--seeds", "0,1", "--runs", str(runs),
+                  "--results", str(results), "--dry-run"]) == 0
+
+
+def test_the_queue_plans_done_unfinished_and_new_runs(tmp_path, capsys):
+    from rigid_gym.agents.table import PACE, main as table, plan
+
+    runs, results = tmp_path / "runs", tmp_path / "results"
+    (runs / "Push-sac-seed1" / "checkpoints" / "step_30000").mkdir(parents=True)
+    (runs / "Push-sac-seed1" / "checkpoints" / "step_30000" / "model.zip").write_bytes(b"")
+    results.mkdir()
+    (results / "Push-sac-seed0.json").write_text("{}")
+    entries = plan(["push", "stack"], None, [0, 1], runs, results)
+    states = {e["name"]: e["state"] for e in entries}
+    assert states == {"Push-sac-seed0": "done", "Push-ppo-seed0": "new",
+                      "Stack-bc_sac-seed0": "new", "Stack-sac-seed0": "new",
+                      "Stack-ppo-seed0": "new", "Push-sac-seed1": "resume at 30,000",
+                      "Push-ppo-seed1": "new", "Stack-bc_sac-seed1": "new",
+                      "Stack-sac-seed1": "new", "Stack-ppo-seed1": "new"}
+    done = next(e for e in entries if e["name"] == "Push-sac-seed0")
+    resumed = next(e for e in entries if e["name"] == "Push-sac-seed1")
+    new = next(e for e in entries if e["name"] == "Stack-sac-seed1")
+    assert done["estimate_s"] == 0 and 0 < new["estimate_s"]
+    pace = PACE[("rigid_gym/Push-v0", "sac")]
+    assert resumed["estimate_s"] == pytest.approx((resumed["steps"] - 30_000) / pace)
+    with pytest.raises(SystemExit):
+        table(["--tasks", "push,nope", "--dry-run"])
+    assert "unknown task(s) ['nope']" in capsys.readouterr().err
+
+
+def test_bc_sac_on_sbx_clones_the_demonstrations():
+    pytest.importorskip("sbx")
+    from stable_baselines3 import HerReplayBuffer
+    from stable_baselines3.common.logger import Logger
+
+    from rigid_gym.agents.algorithms import algorithm_class
+    from rigid_gym.agents.bc_sac import BCSACJax
+    from rigid_gym.agents.train import make_env
+
+    assert algorithm_class("bc_sac", "sbx") is BCSACJax
+    env_id = "rigid_gym/Stack-v0"
+    model = BCSACJax("MultiInputPolicy", make_env(env_id, 1), buffer_size=1000,
+                     replay_buffer_class=HerReplayBuffer, policy_kwargs={"net_arch": [32, 32]},
+                     bc_weight=100.0, bc_batch_size=64, q_filter=False, learning_rate=3e-3,
+                     seed=0)
+    add_demonstrations(model, env_id, episodes=1, seed=0)
+    demo = model.demo_buffer
+    assert demo.pos == model.replay_buffer.pos == 100
+    model.set_logger(Logger(None, []))
+
+    def error():
+        obs = {key: value[:100, 0] for key, value in demo.observations.items()}
+        actions, _ = model.predict(obs, deterministic=True)
+        return float(np.mean((actions - demo.actions[:100, 0]) ** 2))
+
+    before = error()
+    model.train(gradient_steps=200, batch_size=32)
+    assert error() < 0.5 * before
+    assert model.logger.name_to_value["train/bc_kept"] == 1.0  # no Q-filter: every sample
+    model.q_filter = True
+    model.train(gradient_steps=5, batch_size=32)
+    assert 0.0 <= model.logger.name_to_value["train/bc_kept"] <= 1.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(p.stem for p in COMMITTED.glob("*.zip")))
+def test_every_committed_model_still_scores_its_recorded_evaluation(name):
+    """Each committed model's json carries its 100-episode evaluation
+    (``python -m rigid_gym.agents.evaluate`` writes it); the physics or the env changing
+    under a model shows here as a score more than 5 points off."""
+    recorded = json.loads((COMMITTED / f"{name}.json").read_text())["evaluation"]
+    now = evaluate(COMMITTED / f"{name}.zip", episodes=recorded["episodes"], seed=recorded["seed"])
+    assert abs(now["success_rate"] - recorded["success_rate"]) <= 0.05, (now, recorded)

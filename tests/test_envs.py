@@ -324,7 +324,7 @@ def test_stepping_before_reset_is_refused():
 
 @pytest.mark.parametrize("kwargs, message", [
     ({"colour": "red"}, "unexpected keyword"),
-    ({"reward_type": "shaped"}, "reward_type must be"),
+    ({"reward_type": "staged"}, "reward_type must be"),
     ({"render_mode": "ansi"}, "render_mode must be"),
     ({"observation_noise": -0.1}, "observation_noise must be"),
     ({"randomize": {"gravity": (0, 1)}}, "unknown key"),

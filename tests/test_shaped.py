@@ -1,0 +1,129 @@
+"""The shaped reward (reward_type="shaped"): its stages, their order, bounds, and the env."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import rigid_gym  # noqa: F401
+from rigid_gym.envs.push import Push, push_point
+from rigid_gym.envs.scripted import scripted_policy
+from rigid_gym.envs.stack import Stack
+from rigid_gym.envs.task import CUBE_HALF
+from rigid_gym.envs.throw import Throw
+
+HALF1 = np.full((1, 1), CUBE_HALF)
+HALF2 = np.full((1, 2), CUBE_HALF)
+NONE = np.array([-1])
+
+
+def along(start, end, n=12):
+    """n points (n, 3) from start to end."""
+    return [np.asarray(start) + t * (np.asarray(end) - start) for t in np.linspace(0, 1, n)]
+
+
+def strictly_increasing(values):
+    return all(b > a for a, b in zip(values, values[1:]))
+
+
+def test_push_rewards_the_approach_then_the_cube_nearing_the_target():
+    task = Push()
+    cube = np.array([[0.0, 0.0, CUBE_HALF]])
+    goal = np.array([[0.1, 0.05, CUBE_HALF]])
+    point = push_point(cube, goal, HALF1[:, 0])
+    # the push point lies behind the cube, on the side away from the target
+    assert np.dot(point[0, :2] - cube[0, :2], goal[0, :2] - cube[0, :2]) < 0
+    approach = [task.shaped_reward(p[None], NONE, cube, goal, HALF1)[0]
+                for p in along([0.2, -0.2, 0.15], point[0] + [0.0, 0.0, 0.031])]
+    assert strictly_increasing(approach) and max(approach) < 1 / 3
+    # pushing (the pad at the push point): the reward falls as the cube is farther from the
+    # target, and every value is above any value of the approach
+    pushing = []
+    for gap in np.linspace(0.0, 0.25, 10):
+        target = cube + np.array([[gap + 0.01, 0.0, 0.0]])
+        pad = push_point(cube, target, HALF1[:, 0])
+        pushing.append(task.shaped_reward(pad, NONE, cube, target, HALF1)[0])
+    assert strictly_increasing(pushing[::-1]) and min(pushing) > 2 / 3 > max(approach)
+
+
+def test_stack_stages_reach_carry_the_bottom_cube_then_the_top_one():
+    task = Stack()
+    cubes = np.array([[0.1, 0.0, CUBE_HALF, -0.1, 0.0, CUBE_HALF]])
+    goal = np.array([[0.0, 0.1, CUBE_HALF, 0.0, 0.1, 3 * CUBE_HALF]])
+    approach = [task.shaped_reward(p[None], NONE, cubes, goal, HALF2)[0]
+                for p in along([0.0, -0.2, 0.2], [0.1, 0.0, 0.055])]
+    assert strictly_increasing(approach)
+    # cube 0 held and carried towards its target: growing as it nears it
+    carried = []
+    for p in along(cubes[0, :3] + [0, 0, 0.05], goal[0, :3] + [0, 0, 0.06]):
+        achieved = cubes.copy()
+        achieved[0, :3] = p
+        carried.append(task.shaped_reward(p[None] + [0, 0, 0.035], np.array([0]), achieved,
+                                          goal, HALF2)[0])
+    assert strictly_increasing(carried) and min(carried) > max(approach)
+    # cube 0 placed: every value of cube 1's stages is above any of cube 0's
+    placed = cubes.copy()
+    placed[0, :3] = goal[0, :3]
+    top = [task.shaped_reward(p[None], NONE, placed, goal, HALF2)[0]
+           for p in along([0.2, 0.2, 0.2], [-0.1, 0.0, 0.055])]
+    assert strictly_increasing(top) and min(top) > max(carried) and max(top) < 1.0
+
+
+def test_throw_keeps_the_thrown_stage_in_flight():
+    task = Throw()
+    cube = np.array([[0.0, 0.0, CUBE_HALF]])
+    goal = np.array([[0.6, 0.0, CUBE_HALF]])
+    approach = [task.shaped_reward(p[None], NONE, cube, goal, HALF1)[0]
+                for p in along([0.2, 0.2, 0.25], [0.0, 0.0, 0.055])]
+    assert strictly_increasing(approach)
+    held = [task.shaped_reward(p[None] + [0, 0, 0.035], np.array([0]), p[None], goal, HALF1)[0]
+            for p in along([0.0, 0.0, 0.1], [0.25, 0.0, 0.25])]
+    assert strictly_increasing(held) and min(held) > max(approach)
+    # released, flying on towards the bin: still the thrown stage, growing
+    flight = [task.shaped_reward(np.array([[0.25, 0.0, 0.25]]), NONE, p[None], goal, HALF1)[0]
+              for p in along([0.3, 0.0, 0.25], [0.55, 0.0, 0.08])]
+    assert strictly_increasing(flight) and min(flight) > max(held[:1])
+
+
+@pytest.mark.parametrize("task, goal_size, half", [(Push(), 3, HALF1), (Stack(), 6, HALF2),
+                                                    (Throw(), 3, HALF1)])
+def test_shaped_rewards_are_bounded_for_any_state(task, goal_size, half):
+    rng = np.random.default_rng(0)
+    k = 2000
+    pad = rng.uniform(-0.5, 0.8, (k, 3))
+    achieved, desired = rng.uniform(-0.5, 0.8, (2, k, goal_size))
+    held = rng.integers(-1, task.num_cubes, k) if task.has_grip else np.full(k, -1)
+    reward = task.shaped_reward(pad, held, achieved, desired, np.repeat(half, k, axis=0))
+    assert reward.shape == (k,) and np.isfinite(reward).all()
+    assert (reward >= 0.0).all() and (reward < 1.0).all()
+
+
+@pytest.mark.parametrize("env_id, last_stage", [("rigid_gym/Push-v0", 2 / 3),
+                                                ("rigid_gym/Stack-v0", 5 / 6),
+                                                ("rigid_gym/Throw-v0", 2 / 3)])
+def test_a_scripted_episode_climbs_the_stages_to_one(env_id, last_stage):
+    env = gym.make(env_id, reward_type="shaped")
+    policy = scripted_policy(env)
+    obs, _ = env.reset(seed=0)
+    rewards, done = [], False
+    while not done:
+        obs, reward, terminated, truncated, info = env.step(policy(obs))
+        rewards.append(reward)
+        done = terminated or truncated
+    assert info["is_success"] and rewards[-1] == 1.0
+    assert all(0.0 <= r <= 1.0 for r in rewards)
+    first = rewards.index(1.0)  # 1 from the first step at the goal on
+    assert rewards[0] < 1 / 3 and last_stage < max(rewards[:first]) < 1.0
+    with pytest.raises(ValueError, match="cannot be recomputed from goals"):
+        env.unwrapped.compute_reward(obs["achieved_goal"], obs["desired_goal"], {})
+
+
+def test_the_batched_env_gives_the_single_envs_shaped_rewards():
+    vector = gym.make_vec("rigid_gym/Stack-v0", num_envs=3, reward_type="shaped")
+    singles = [gym.make("rigid_gym/Stack-v0", reward_type="shaped") for _ in range(3)]
+    vector.reset(seed=5)
+    for i, env in enumerate(singles):
+        env.reset(seed=5 + i)
+    actions = np.random.default_rng(1).uniform(-1, 1, (30, 3, 4))
+    for step in actions:
+        batch = vector.step(step)[1]
+        assert [env.step(a)[1] for env, a in zip(singles, step)] == batch.tolist()
