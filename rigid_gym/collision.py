@@ -11,6 +11,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from rigid_gym._core import TOUCHING_GAP
+
 SWEEP_MIN_BODIES = 64
 """Bounded bodies from which sort-and-sweep beats brute force (benchmarks/collision.py)."""
 
@@ -20,7 +22,8 @@ class Contacts(NamedTuple):
 
     world (k,) int32; body_a, body_b (k,) int32; point (k, 3) m (the deepest point of one body
     inside the other); normal (k, 3) unit, from body_b towards body_a; depth (k,) m,
-    > 0 when overlapping, about 0 (+-1e-16) for bodies resting on each other. Within a pair
+    > 0 when overlapping, > -TOUCHING_GAP (1e-6 m: touching, as the solver counts it; about
+    +-1e-16 for bodies resting on each other) when no margin is asked for. Within a pair
     the deepest contact comes first. pair_impulse (k, 3) N s: the impulse the row's pair
     transmitted to body_a during the last step (the solver resolves a pair's touching points
     as patches, one impulse each, so there is no impulse per point; zero for a pair the last

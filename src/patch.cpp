@@ -316,6 +316,38 @@ Targets normal_targets(const BodyModel& model, const ContactSet& set, int64_t se
     return out;
 }
 
+// The sliding wrench for j = j_n s with the tip constraints only: j_n and the tip moment m
+// reaching `target` (normal_targets); false for a singular system.
+bool solve_sliding(const Matrix6& big, const Vec3* d, int tips, Vec3 s, Vec3 n, const Targets& target,
+                   double vn, Vec3 w, double& jn, Vec3& mo) {
+    Matrix6 system;
+    double rhs[6], sol[6];
+    sliding_system(big, d, tips, s, n, system);
+    rhs[0] = target.normal - vn;
+    for (int k = 0; k < tips; ++k) {
+        rhs[1 + k] = target.tip[k] - (w.x * d[k].x + w.y * d[k].y + w.z * d[k].z);
+    }
+    if (!solve_dense(system, rhs, 1 + tips, sol)) {
+        return false;
+    }
+    jn = sol[0];
+    mo = moment(d, sol, 1, tips);
+    return true;
+}
+
+// The change of relative velocity at the patch centre that the wrench (j, m) makes: the top
+// rows of big [j; m].
+Vec3 centre_velocity_change(const Matrix6& big, Vec3 j, Vec3 m) {
+    const double x[6] = {j.x, j.y, j.z, m.x, m.y, m.z};
+    double dv[3] = {0.0, 0.0, 0.0};
+    for (int i = 0; i < 3; ++i) {
+        for (int k = 0; k < 6; ++k) {
+            dv[i] += big[i][k] * x[k];
+        }
+    }
+    return {dv[0], dv[1], dv[2]};
+}
+
 }  // namespace
 
 Vec3 relative_point_velocity(const BodyStates& bodies, int a, int b, Vec3 ra, Vec3 rb) {
@@ -450,24 +482,31 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
             }
         }
     }
-    // sliding (or frictionless): j = j_n s, s = n - mu T, with the tip constraints only
-    const Vec3 u = {v.x - vn * n.x, v.y - vn * n.y, v.z - vn * n.z};
+    // sliding (or frictionless): j = j_n s, s = n - mu T, with the tip constraints only. T is
+    // the direction the patch slides in once the wrench has acted, taken from the frictionless
+    // wrench: the tip constraints can turn the sliding round (a block pushed at its top rocks
+    // its base backwards before they stop the rocking), and friction must oppose the sliding
+    // that is left, not the one before (then it pointed forwards in the push's first step).
+    Vec3 u = {v.x - vn * n.x, v.y - vn * n.y, v.z - vn * n.z};
+    double jn;
+    Vec3 mo;
+    if (mu > 0.0 && solve_sliding(big, d, tips, n, n, target, vn, w, jn, mo) && jn > 0.0) {
+        const Vec3 after = add(v, centre_velocity_change(big, scale(jn, n), mo));
+        const double an = dot(after, n);
+        const Vec3 left = {after.x - an * n.x, after.y - an * n.y, after.z - an * n.z};
+        if (std::max(std::max(std::fabs(left.x), std::fabs(left.y)), std::fabs(left.z)) > REST_SPEED) {
+            u = left;
+        }
+    }
     const double ut = std::sqrt(u.x * u.x + u.y * u.y + u.z * u.z);
     const double friction = ut > 0.0 ? mu : 0.0;
     Vec3 s = n;
     if (friction > 0.0) {
         s = {n.x - friction * u.x / ut, n.y - friction * u.y / ut, n.z - friction * u.z / ut};
     }
-    sliding_system(big, d, tips, s, n, system);
-    rhs[0] = target.normal - vn;
-    for (int k = 0; k < tips; ++k) {
-        rhs[1 + k] = target.tip[k] - (w.x * d[k].x + w.y * d[k].y + w.z * d[k].z);
-    }
-    if (!solve_dense(system, rhs, 1 + tips, sol)) {
+    if (!solve_sliding(big, d, tips, s, n, target, vn, w, jn, mo)) {
         return unresolved;
     }
-    const double jn = sol[0];
-    const Vec3 mo = moment(d, sol, 1, tips);
     if (jn <= 0.0) {
         return separating;
     }

@@ -220,12 +220,13 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
         const double mu = std::sqrt(model.friction[a] * model.friction[b]);
         const int approaching = gather_patch(s, set, seed, count);
         const double e = restitution_for(w, a, b, mode, ramp_e);
-        double closing = 0.0;
+        double single_e = e;  // the restitution of a single impulse at the patch's centre
         if (mode != COLLISION) {  // the collision stage predicts dt^2 g ahead: depth is no gap
-            closing = closing_restitution(model, set, seed, count, dt);
+            const double closing = closing_restitution(model, set, seed, count, dt);
             if (closing <= -1.0) {
                 continue;
             }
+            single_e = std::min(e, closing);
         }
         if (mode != COLLISION && !movable.b) {
             const Vec3 prior = prior_impulse(w, set, seed, count);
@@ -258,7 +259,7 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
         if (movable.b) {
             add_point_mass_matrix(model.inverse_mass[b], s.inverse_inertia[b], rb, k);
         }
-        const Vec3 j = contact_impulse(k, v, n, std::min(e, closing), mu);
+        const Vec3 j = contact_impulse(k, v, n, single_e, mu);
         if (mu > 0.0 && radius > 0.0) {
             apply_with_spin_friction(s, model, a, b, movable, j, {0.0, 0.0, 0.0}, ra, rb, n,
                                      mu * dot(j, n) * radius);

@@ -483,15 +483,14 @@ def _top_pushed_block(mu, force, dt=1 / 240, until_tilt_deg=30.0, seconds=0.4):
 
 def test_a_block_pushed_at_its_top_slides_upright_at_f_over_m_minus_mu_g():
     """F = 0.2 m g at the top, mu = 0.1: tipping needs F h > m g w / 2 (F > 0.25 m g), so the
-    block slides upright with a = F/m - mu g = 0.1 g. The first push step is left out: the
-    sliding wrench takes friction's direction from the patch centre's velocity before the tip
-    constraints act, and the push rocks the base backwards within that step, so friction
-    points forwards once (a = F/m + mu g); see docs/architecture.md's open points."""
+    block slides upright with a = F/m - mu g = 0.1 g from the first push step on (the push
+    rocks the base backwards until the tip constraints stop it; friction opposes the sliding
+    left after them, not the backward slip before: a = F/m + mu g in that step otherwise)."""
     g = 9.81
     _, tilt, v = _top_pushed_block(0.1, 0.2 * g, until_tilt_deg=90.0)
     dt = 1 / 240
     assert tilt < 1e-6
-    np.testing.assert_allclose(np.diff(v) / dt, 0.1 * g, rtol=1e-9)
+    np.testing.assert_allclose(np.diff(np.concatenate([[0.0], v])) / dt, 0.1 * g, rtol=1e-9)
 
 
 def test_a_block_pushed_hard_at_its_top_tips_about_a_fixed_edge():

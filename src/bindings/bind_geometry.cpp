@@ -8,6 +8,7 @@
 #include "impulse.h"
 #include "integrate.h"
 #include "narrow_phase.h"
+#include "patch.h"
 #include "step.h"
 
 namespace rg {
@@ -48,6 +49,7 @@ void bind_geometry(nb::module_& m) {
     m.attr("MESH") = static_cast<int>(MESH);
     m.attr("PLANE") = static_cast<int>(PLANE);
     m.attr("CAPSULE_CORE_SAMPLES") = CAPSULE_CORE_SAMPLES;
+    m.attr("TOUCHING_GAP") = CLOSED_GAP;
     m.attr("BROAD_PHASE") = static_cast<int>(BROAD_PHASE);
     m.attr("COLLISION_PHASE") = static_cast<int>(COLLISION_PHASE);
     m.attr("VELOCITY_PHASE") = static_cast<int>(VELOCITY_PHASE);
