@@ -39,7 +39,7 @@ import yaml
 
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.env_util import make_vec_env
-from stable_baselines3.common.vec_env import VecCheckNan
+from stable_baselines3.common.vec_env import DummyVecEnv, VecCheckNan
 
 import rigid_gym  # noqa: F401  (registers the env ids)
 from rigid_gym.agents.algorithms import algorithm_class
@@ -67,7 +67,7 @@ def load_hyperparams(env_id: str) -> dict:
     return table[env_id]
 
 
-def run_directory(out: Path, env_id: str, algo: str, seed: int) -> Path:
+def run_directory(out: str | Path, env_id: str, algo: str, seed: int) -> Path:
     task = env_id.split("/")[-1]
     return Path(out) / task / f"{algo}-seed{seed}"
 
@@ -143,7 +143,7 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
 
     before = record if resume is not None else {}  # the seconds of the parts before a resume
     clock = Clock(before.get("wall_seconds", 0.0), before.get("cpu_seconds", 0.0))
-    callbacks = []
+    callbacks: list[BaseCallback] = []
     if eval_freq:
         callbacks.append(SuccessEvaluation(env_id, folder / "evaluations.csv", eval_freq,
                                            eval_episodes, clock, append=resume is not None,
@@ -207,8 +207,10 @@ def add_demonstrations(model, env_id: str, episodes: int, seed: int,
 
     n_envs = model.n_envs
     env = make_vec_env(env_id, n_envs=n_envs, seed=DEMO_SEED + 1000 * seed)
+    assert isinstance(env, DummyVecEnv)  # make_vec_env's default: the envs are in this process
     policies = [scripted_policy(e) for e in env.envs]
     obs = env.reset()
+    assert isinstance(obs, dict)  # the tasks' observations are goal dicts
     buffers = [model.replay_buffer]
     if hasattr(model, "make_demo_buffer"):
         length = gym.spec(env_id).max_episode_steps
@@ -219,6 +221,7 @@ def add_demonstrations(model, env_id: str, episodes: int, seed: int,
         actions = np.stack([policy({key: value[i] for key, value in obs.items()})
                             for i, policy in enumerate(policies)]).astype(np.float32)
         next_obs, rewards, dones, infos = env.step(actions)
+        assert isinstance(next_obs, dict)
         stored = {key: value.copy() for key, value in next_obs.items()}
         for i in np.flatnonzero(dones):  # the VecEnv has reset these; store the true last obs
             for key in stored:

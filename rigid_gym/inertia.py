@@ -191,7 +191,8 @@ def _compound(compound: Compound, density: float) -> MassProperties:
     return combine([(mass_properties(shape, density), pose) for shape, pose in compound.parts])
 
 
-_EXACT = {Sphere: _sphere, Box: _box, Capsule: _capsule, Mesh: _mesh, Compound: _compound}
+_EXACT: dict[type, Callable[..., MassProperties]] = {
+    Sphere: _sphere, Box: _box, Capsule: _capsule, Mesh: _mesh, Compound: _compound}
 
 
 def mass_properties(shape, density: float) -> MassProperties:

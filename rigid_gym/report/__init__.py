@@ -14,14 +14,24 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import TypedDict
 
 from rigid_gym.report import accuracy, cases, document, peers, stability
 
-FULL = {"dts": (1 / 30, 1 / 60, 1 / 120, 1 / 240, 1 / 480, 1 / 960, 1 / 1920), "repeats": 5,
-        "grid": (8, 16, 32, 64, 128), "samples": (1_000, 10_000, 100_000, 1_000_000),
-        "scale": 1.0}
-QUICK = {"dts": (1 / 60, 1 / 240), "repeats": 1, "grid": (8, 16), "samples": (1_000, 10_000),
-         "scale": 0.02}
+
+class Sizes(TypedDict):
+    dts: tuple[float, ...]
+    repeats: int
+    grid: tuple[int, ...]
+    samples: tuple[int, ...]
+    scale: float
+
+
+FULL: Sizes = {"dts": (1 / 30, 1 / 60, 1 / 120, 1 / 240, 1 / 480, 1 / 960, 1 / 1920),
+               "repeats": 5, "grid": (8, 16, 32, 64, 128),
+               "samples": (1_000, 10_000, 100_000, 1_000_000), "scale": 1.0}
+QUICK: Sizes = {"dts": (1 / 60, 1 / 240), "repeats": 1, "grid": (8, 16),
+                "samples": (1_000, 10_000), "scale": 0.02}
 """Sweep sizes: dt values (s), timing repeats, grid resolutions, Monte Carlo sample counts and
 the stiff cases' duration scale."""
 
