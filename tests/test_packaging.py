@@ -2,6 +2,10 @@
 
 import ast
 import inspect
+import json
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import rigid_gym
@@ -39,3 +43,23 @@ def test_the_package_is_marked_typed():
     """PEP 561: type checkers read a package's own annotations only when py.typed is beside
     its __init__.py."""
     assert (Path(rigid_gym.__file__).parent / "py.typed").is_file()
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_an_install_puts_neither_the_checkout_nor_its_parent_on_sys_path(tmp_path):
+    """Importing rigid_gym (an editable install included) adds no folder of the checkout, nor
+    the folder holding it, to sys.path: otherwise every folder beside the checkout, and the
+    checkout's own envs/, agents/, tests/ and benchmarks/, import by their bare names. Run in a
+    fresh interpreter from an empty folder, without PYTHONPATH."""
+    probe = ("import importlib.util, json, sys; import rigid_gym; "
+             "print(json.dumps([sys.path, [n for n in ('envs', 'agents', 'tests', 'benchmarks') "
+             "if importlib.util.find_spec(n) is not None]]))")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    out = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, env=env, check=True,
+                         capture_output=True, text=True).stdout
+    path, importable = json.loads(out)
+    entries = {Path(p or tmp_path).resolve() for p in path}
+    assert ROOT not in entries and ROOT.parent not in entries, path
+    assert importable == []
