@@ -6,6 +6,7 @@ import json
 import os
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 import rigid_gym
@@ -63,3 +64,14 @@ def test_an_install_puts_neither_the_checkout_nor_its_parent_on_sys_path(tmp_pat
     entries = {Path(p or tmp_path).resolve() for p in path}
     assert ROOT not in entries and ROOT.parent not in entries, path
     assert importable == []
+
+
+def test_one_version_in_pyproject_the_changelog_and_the_package():
+    """pyproject.toml holds the version; the changelog's newest entry and
+    rigid_gym.__version__ (the installed metadata) name the same one."""
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    assert "version" not in project.get("dynamic", [])
+    headings = [line for line in (ROOT / "CHANGELOG.md").read_text().splitlines()
+                if line.startswith("## ")]
+    assert headings[0].split()[1] == project["version"], headings[0]
+    assert rigid_gym.__version__ == project["version"], "reinstall: pip install -e ."
