@@ -1,7 +1,7 @@
 """Unit quaternions on the Python side (vectorised numpy), ordered (w, x, y, z).
 
-The kernels have their own scalar versions in :mod:`rigid_gym.kernels.quaternion`; tests check
-that both agree. These are for building scenes, validating input and analysing results.
+The compiled core has its own scalar versions (``src/math.h``); tests check that both agree.
+These are for building scenes, validating input and analysing results.
 """
 
 from __future__ import annotations

@@ -67,6 +67,6 @@ def generate(out="docs", quick: bool = False, compare: bool = True, log=print) -
         f"Timing: median of {sizes['repeats']} run(s). Settings are SolverConfig overrides of "
         "`SolverConfig.for_scene`: *default* (5 collision passes where any e > 0, 10 contact "
         "passes, 2 shock sweeps, rotation order 2), fewer passes, or another rotation order.")
-    path = document.write(results, Path(out), stability.KNOWN_CAUSES)
+    path = document.write(results, Path(out))
     log(f"wrote {path} in {results.seconds:.0f} s")
     return path

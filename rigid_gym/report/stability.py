@@ -401,7 +401,3 @@ def run_all(scale: float) -> list[StiffResult]:
         raise ValueError(f"run_all: scale must be in (0, 1], got {scale!r}")
     return [result for case in CASES for result in case(scale)]
 
-
-KNOWN_CAUSES: dict[str, str] = {}
-"""Diagnosed causes of cases that fail, shown in the report next to the failure (a case that
-fails without an entry is reported as not yet diagnosed)."""
