@@ -69,9 +69,10 @@ from rerun.chunk import Chunk, ChunkStore
 
 from rigid_gym import quaternion as quat
 from rigid_gym._core import STATIC
+from rigid_gym.geometry import primitives
 from rigid_gym.render import body_colors, corner_normals, tessellate
 from rigid_gym.scene import Scene
-from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
+from rigid_gym.shapes import Box, Capsule, Mesh, Plane, Pose, Sphere
 
 PIPE_BYTES = 1 << 20
 """bytes the pipe to the writer holds (Linux's default is 64 KiB): ~70 files of 50-step
@@ -471,24 +472,13 @@ def _geometry(shape, pose: Pose, rgba: np.ndarray) -> list:
     """The archetypes that draw ``shape`` placed at ``pose`` in an entity's frame, in colour
     ``rgba`` (4,) uint8, to be logged as one static row: a Compound's parts are flattened,
     and primitives of a kind share one archetype (its instances placed by their poses)."""
-    leaves = _primitives(shape, pose)
+    leaves = primitives(shape, pose)
     archetypes = []
     for kind, build in _ARCHETYPES:
         parts = [(s, p) for s, p in leaves if isinstance(s, kind)]
         if parts:
             archetypes.append(build(parts, rgba))
     return archetypes
-
-
-def _primitives(shape, pose: Pose) -> list:
-    """(shape, Pose) of every primitive of ``shape`` placed at ``pose`` (Compounds flattened,
-    their part poses composed with ``pose``)."""
-    if not isinstance(shape, Compound):
-        return [(shape, pose)]
-    return [leaf for part, part_pose in shape.parts
-            for leaf in _primitives(part, Pose(pose.apply(part_pose.position),
-                                               quat.multiply(pose.orientation,
-                                                             part_pose.orientation)))]
 
 
 def _boxes(parts: list, rgba: np.ndarray) -> rr.Boxes3D:
