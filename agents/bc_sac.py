@@ -27,6 +27,7 @@ import torch as th
 from torch.nn import functional as F
 
 from stable_baselines3 import SAC, HerReplayBuffer
+from stable_baselines3.common.buffers import ReplayBuffer
 from stable_baselines3.common.utils import polyak_update
 
 
@@ -40,17 +41,19 @@ class DemoBuffer:
                  q_filter: bool = True, bc_relabel: bool = False, **kwargs):
         self.bc_weight, self.bc_batch_size, self.q_filter = bc_weight, bc_batch_size, q_filter
         self.bc_relabel = bc_relabel
-        self.demo_buffer = None
+        self.demo_buffer: ReplayBuffer | None = None
         super().__init__(*args, **kwargs)
 
     def make_demo_buffer(self, size: int):
         """A new, empty ``demo_buffer`` of the replay buffer's kind for ``size`` transitions."""
         kwargs = dict(self.replay_buffer_kwargs)
-        if issubclass(self.replay_buffer_class, HerReplayBuffer):
+        buffer_class = self.replay_buffer_class
+        assert buffer_class is not None  # SAC's _setup_model sets it
+        if issubclass(buffer_class, HerReplayBuffer):
             kwargs["env"] = self.env
             if not self.bc_relabel:
                 kwargs["n_sampled_goal"] = 0  # every sample keeps its episode's goal
-        self.demo_buffer = self.replay_buffer_class(
+        self.demo_buffer = buffer_class(
             size, self.observation_space, self.action_space, device=self.device,
             n_envs=self.n_envs, **kwargs)
         return self.demo_buffer
@@ -65,6 +68,7 @@ class BCSAC(DemoBuffer, SAC):
 
     def _bc_loss(self) -> tuple[th.Tensor, float]:
         """The filtered behaviour-cloning loss and the fraction of demo samples it kept."""
+        assert self.demo_buffer is not None  # train uses the term only with a demo buffer
         demo = self.demo_buffer.sample(self.bc_batch_size, env=self.get_vec_normalize_env())
         action = self.actor(demo.observations, deterministic=True)
         error = ((action - demo.actions) ** 2).sum(dim=1)
@@ -83,9 +87,10 @@ class BCSAC(DemoBuffer, SAC):
         if self.ent_coef_optimizer is not None:
             optimizers += [self.ent_coef_optimizer]
         self._update_learning_rate(optimizers)
-        logs = {name: [] for name in ("ent_coef", "actor_loss", "critic_loss", "bc_loss",
+        logs: dict[str, list[float]] = {name: [] for name in ("ent_coef", "actor_loss", "critic_loss", "bc_loss",
                                       "bc_kept")}
         use_bc = self.bc_weight > 0 and self.demo_buffer is not None and self.demo_buffer.size()
+        assert self.replay_buffer is not None  # SAC's _setup_model makes it
 
         for gradient_step in range(gradient_steps):
             data = self.replay_buffer.sample(batch_size, env=self.get_vec_normalize_env())
@@ -94,8 +99,9 @@ class BCSAC(DemoBuffer, SAC):
             actions_pi, log_prob = self.actor.action_log_prob(data.observations)
             log_prob = log_prob.reshape(-1, 1)
 
-            if self.ent_coef_optimizer is not None:
+            if self.ent_coef_optimizer is not None and self.log_ent_coef is not None:
                 ent_coef = th.exp(self.log_ent_coef.detach())
+                assert isinstance(self.target_entropy, float)  # "auto" is resolved by then
                 ent_coef_loss = -(self.log_ent_coef * (log_prob + self.target_entropy).detach()
                                   ).mean()
                 self.ent_coef_optimizer.zero_grad()
@@ -113,6 +119,7 @@ class BCSAC(DemoBuffer, SAC):
                 target_q = data.rewards + (1 - data.dones) * discounts * next_q
             current_q = self.critic(data.observations, data.actions)
             critic_loss = 0.5 * sum(F.mse_loss(q, target_q) for q in current_q)
+            assert isinstance(critic_loss, th.Tensor)  # a sum of at least one critic's loss
             logs["critic_loss"].append(critic_loss.item())
             self.critic.optimizer.zero_grad()
             critic_loss.backward()

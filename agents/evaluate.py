@@ -74,8 +74,8 @@ def load_model(path: str | Path, env: gym.Env, algo: str | None = None):
     try:
         return cls.load(path, env=env, device="cpu")
     except ValueError as exc:  # spaces that differ from the env's
-        raise ValueError(f"load_model: {path} does not fit {env.unwrapped.spec.id}: {exc}"
-                         ) from None
+        name = env.spec.id if env.spec is not None else type(env.unwrapped).__name__
+        raise ValueError(f"load_model: {path} does not fit {name}: {exc}") from None
 
 
 def run_metadata(path: str | Path) -> dict:

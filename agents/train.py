@@ -98,7 +98,7 @@ def run_name(env_id: str, algo: str, seed: int) -> str:
     return f"{env_id.split('/')[-1].rsplit('-v', 1)[0]}-{algo}-seed{seed}"
 
 
-def run_directory(out: Path, env_id: str, algo: str, seed: int) -> Path:
+def run_directory(out: str | Path, env_id: str, algo: str, seed: int) -> Path:
     return Path(out) / run_name(env_id, algo, seed)
 
 
@@ -215,7 +215,7 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
 
     before = record if resume is not None else {}  # the seconds of the parts before a resume
     clock = Clock(before.get("wall_seconds", 0.0), before.get("cpu_seconds", 0.0))
-    callbacks = []
+    callbacks: list[BaseCallback] = []
     if eval_freq:
         callbacks.append(SuccessEvaluation(env_id, folder / "evaluations.csv", eval_freq,
                                            eval_episodes, clock, append=resume is not None,

@@ -42,7 +42,9 @@ class SB3VecEnv(VecEnv):
         return self.next_seeds
 
     def reset(self):
-        observation, infos = self.venv.reset(seed=self.next_seeds)
+        # Gymnasium's vector envs take one seed per env, though VectorEnv.reset's annotation
+        # names only an int
+        observation, infos = self.venv.reset(seed=self.next_seeds)  # type: ignore[arg-type]
         self.reset_infos = self.split(infos)
         self.next_seeds = None
         return observation
@@ -56,8 +58,9 @@ class SB3VecEnv(VecEnv):
         dones = terminated | truncated
         if dones.any():  # the ended episodes' last infos, as SB3 expects
             final = self.split(infos["final_info"])
-            for i in np.flatnonzero(dones):
-                per_env[i] = {**final[i], "terminal_observation": infos["final_obs"][i]}
+            for ended in np.flatnonzero(dones):
+                per_env[ended] = {**final[ended],
+                                  "terminal_observation": infos["final_obs"][ended]}
         for i, info in enumerate(per_env):
             info["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
         return observation, rewards.astype(np.float32), dones, per_env
@@ -86,7 +89,7 @@ class SB3VecEnv(VecEnv):
 
     def split(self, infos: dict) -> list[dict]:
         """Gymnasium's batched info dict (arrays with "_key" masks) -> one dict per env."""
-        per_env = [{} for _ in range(self.num_envs)]
+        per_env: list[dict] = [{} for _ in range(self.num_envs)]
         for key, values in infos.items():
             if key.startswith("_") or key in ("final_obs", "final_info"):
                 continue

@@ -7,8 +7,9 @@
    steps each after a warm-up; panda-gym's PandaPush-v3 timed the same way in the same run
    when it is installed (``pip install panda-gym``), and our rate as a ratio to it.
 3. ``render_mode="rgb_array"`` frame time (480 x 480), the median over 20 frames of an
-   episode, after the first (compiling) frame; and a picture of every task at the start and
-   at the end of a scripted episode (seed 1), written to ``--frames`` (default docs/images).
+   episode, after the first frame (which builds the renderer); and a picture of every task at
+   the start and at the end of a scripted episode (seed 1), written to ``--frames`` (default
+   docs/images).
 
     python benchmarks/envs.py                    # all three tables, about 3 minutes on 2 cores
     python benchmarks/envs.py --only speed       # one table: success, speed or render

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import os
 import sys
+from typing import TYPE_CHECKING
 
 import gymnasium as gym
 import numpy as np
@@ -26,6 +27,9 @@ from rigid_gym.envs.core import ALL, TaskBatch
 from rigid_gym.envs.options import ARGUMENTS_TABLE, Options, checked_actions
 from rigid_gym.envs.pixels import DEFAULT_SIZE, PixelOptions
 from rigid_gym.envs.task import OBJECT_FEATURES, STEP_TIME, Task
+
+if TYPE_CHECKING:
+    from rigid_gym.render import Renderer
 
 ACTION_NAMES = ("x", "y", "z", "grip")
 """The action entries: the pad's motion along x, y, z, and the grip."""
@@ -65,7 +69,7 @@ class RigidGymEnv(gym.Env):
         entries, success; ``scalars`` gives their values."""
         self.core = TaskBatch(self.task, self.options, None, name)
         self.action_argument = f"{name}.step: action"  # as errors name it
-        self.renderer = None  # made at the first frame of an episode
+        self.renderer: Renderer | None = None  # made at the first frame of an episode
         self.viewer: bool | None = None
         """render_mode='human': whether frames go to the rerun viewer (a display was found at
         the first render), None until then."""

@@ -19,6 +19,7 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+from gymnasium.error import ResetNeeded
 
 from rigid_gym._core import gather_observations
 from rigid_gym.scene import Scene
@@ -65,7 +66,7 @@ class TaskBatch:
     def __init__(self, task: Task, options: Options, num_worlds: int | None, name: str):
         self.task, self.options, self.name = task, options, name
         self.batched = num_worlds is not None
-        b = int(num_worlds) if self.batched else 1
+        b = 1 if num_worlds is None else int(num_worlds)
         self.num_worlds = b
         self.rngs: list = [None] * b
         self.goals = np.zeros((b, task.goal_size))
@@ -119,6 +120,12 @@ class TaskBatch:
             self.frames = CopyFrames(scene, self.task, half, self.options.pixels,
                                      self.num_worlds)
 
+    def built(self) -> tuple[World, SuctionGripper]:
+        """The World and its gripper, which the first reset builds."""
+        if self.world is None or self.gripper is None:
+            raise ResetNeeded(f"{self.name}: call reset() first (it builds the World)")
+        return self.world, self.gripper
+
     # -- episodes ---------------------------------------------------------------------------
 
     def reset(self, copies, rngs: list) -> Outcome:
@@ -158,7 +165,7 @@ class TaskBatch:
         (k, fixtures, 3) m and, when randomised, the drawn materials (``factors`` {name:
         (k, cubes + 2)}). Every copy at once takes one call per body (the World's setters
         take (B, ...) values for all worlds); some copies take one each."""
-        w, n = self.world, self.task.num_cubes
+        (w, gripper), n = self.built(), self.task.num_cubes
         if factors:  # factors of 1 (restitution 0) for what is not randomised
             one = np.ones((len(rows), n + 2))
             mass = CUBE_MASS * factors.get("mass", one)
@@ -177,15 +184,16 @@ class TaskBatch:
                                    restitution=restitution[k, j], world=world)
                 w.set_material(self.gripper_body, friction=friction[k, n], world=world)
                 w.set_material(self.table, friction=friction[k, n + 1], world=world)
-        self.gripper.forget(copies)
+        gripper.forget(copies)
 
     def step(self, actions: np.ndarray) -> Outcome:
         """One env step of every copy: ``actions`` (B, action size), checked and clipped to
         [-1, 1], command the grippers; the solver runs SOLVER_STEPS steps of every world in
         one call (held objects carried in it); returns every copy's Outcome."""
+        world, gripper = self.built()
         grips = actions[:, 3] if self.task.has_grip else None
-        self.gripper.command(actions[:, :3], grips)
-        self.world.step(SOLVER_STEPS)
+        gripper.command(actions[:, :3], grips)
+        world.step(SOLVER_STEPS)
         return self.observe(ALL)
 
     # -- observations and rewards -----------------------------------------------------------
@@ -201,13 +209,14 @@ class TaskBatch:
         ``compute_reward`` sees them. With pixels (``obs_mode``), ``pixels`` holds the
         copies' frames (k, height, width, 3) uint8, and "pixels" mode leaves out
         ``observation``."""
+        world, gripper = self.built()
         worlds = self.all_worlds[copies]
-        s = self.world.state
+        s = world.state
         vectors = np.empty((len(worlds), len(self.gather)))
         finite = gather_observations(s.position, s.velocity, s.rotation, s.angular_velocity,
                                      worlds, self.gather, self.minus, vectors)
         if self.task.has_grip:
-            vectors[:, 6] = self.gripper.held[copies] >= 0
+            vectors[:, 6] = gripper.held[copies] >= 0
         if not finite:  # a solver failure: say so here, not in a network
             self.refuse_non_finite(vectors, worlds)
         achieved = vectors[:, self.achieved_columns].astype(np.float32)
@@ -248,7 +257,7 @@ class TaskBatch:
         bad = np.flatnonzero(~np.isfinite(vectors[row])).tolist()
         which = f" (copy {copy})" if self.num_worlds > 1 else ""
         raise RuntimeError(f"{self.name}{which}: the simulation produced non-finite state "
-                           f"(observation entries {bad}) at t = {self.world.time:.3f} s")
+                           f"(observation entries {bad}) at t = {self.built()[0].time:.3f} s")
 
     def compute_reward(self, achieved_goal, desired_goal) -> np.ndarray:
         """The reward of goals of shape (..., goal_size) -> (...) float64 (``Task.reward``

@@ -109,7 +109,7 @@ def randomization_ranges(randomize, where: str) -> dict:
     return ranges
 
 
-def checked_actions(values, space: spaces.Box, what: str) -> np.ndarray:
+def checked_actions(values, space: spaces.Space, what: str) -> np.ndarray:
     """``values`` as float64 clipped to [-1, 1], if they are a real numeric array of
     ``space``'s shape whose entries are all finite; otherwise a ValueError naming ``what``
     (the env and the argument: "PushEnv.step: action"). A batch ((B, a) actions) names the
@@ -129,7 +129,7 @@ def checked_actions(values, space: spaces.Box, what: str) -> np.ndarray:
     return np.minimum(np.maximum(actions, -1.0), 1.0)  # documented: outside [-1, 1] is clipped
 
 
-def real_array(values, what: str, space: spaces.Box) -> np.ndarray:
+def real_array(values, what: str, space: spaces.Space) -> np.ndarray:
     """``values`` as a float64 array, if they are a real numeric array (or nested sequence) of
     bool, int or float of any width; otherwise a ValueError naming ``what`` (the env and the
     argument) and the expected ``space``. Strings (even "0.5"), complex numbers, objects and

@@ -21,6 +21,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from rigid_gym.envs import TASKS
 from rigid_gym.envs.base import RigidGymEnv, task_spaces
 from rigid_gym.envs.core import ALL, TaskBatch
 from rigid_gym.envs.options import Options, checked_actions
@@ -138,13 +139,15 @@ def final_infos(num_envs: int, ended: np.ndarray, observations: dict,
             "_final_info": mask.copy()}
 
 
-def vector_entry_point(env_class: type[RigidGymEnv]):
-    """The function ``gym.make_vec`` calls for ``env_class``'s ids."""
-    def make(num_envs: int = 1, max_episode_steps: int = 50, **kwargs) -> RigidGymVectorEnv:
+def vector_entry_point(env_class: type[RigidGymEnv], task: str):
+    """The function ``gym.make_vec`` calls for ``env_class``'s ids; episodes last the task's
+    registered length (``TASKS[task]`` env steps) unless ``max_episode_steps`` is given."""
+    def make(num_envs: int = 1, max_episode_steps: int = TASKS[task],
+             **kwargs) -> RigidGymVectorEnv:
         return RigidGymVectorEnv(env_class, num_envs, max_episode_steps, **kwargs)
     return make
 
 
-push = vector_entry_point(PushEnv)
-stack = vector_entry_point(StackEnv)
-throw = vector_entry_point(ThrowEnv)
+push = vector_entry_point(PushEnv, "Push")
+stack = vector_entry_point(StackEnv, "Stack")
+throw = vector_entry_point(ThrowEnv, "Throw")

@@ -8,6 +8,8 @@
     world.step(240)
 """
 
+import importlib.metadata
+
 from rigid_gym.config import SolverConfig
 from rigid_gym.inertia import MassProperties, mass_properties
 from rigid_gym.render import Camera, Renderer
@@ -20,4 +22,4 @@ __all__ = [
     "ENV_IDS", "Box", "Capsule", "Compound", "MassProperties", "Mesh", "Plane", "Pose", "Scene",
     "SolverConfig", "Sphere", "World", "mass_properties",
 ]
-__version__ = "0.1.0"
+__version__ = importlib.metadata.version("rigid_gym")  # pyproject.toml's

@@ -1,7 +1,7 @@
 """SolverConfig: which phases of the step run and how.
 
 ``SolverConfig.for_scene(scene)`` derives the cheapest configuration that cannot change a
-scene's result (DESIGN.md §5); any field can be given to override it, and
+scene's result (docs/architecture.md); any field can be given to override it, and
 ``dataclasses.replace`` changes one later.
 """
 
@@ -30,7 +30,7 @@ class SolverConfig:
     shock_sweeps: sweeps per level of shock propagation; 0 switches it off. It only matters
         where a body can rest on another (or on the ground) under gravity; resting contact
         is made exact there (``src/patch.h``).
-    rotation_order: 1 = the exact-rotation update of the course notes with omega at the start
+    rotation_order: 1 = the exact rotation through omega dt, omega taken at the start
         of the step (first order); 2 = Buss's second-order update (omega + h/2 alpha);
         3 = Buss's third-order update. Cost grows slightly with the order.
     box_edge_segments: each box edge carries this many - 1 surface samples between its

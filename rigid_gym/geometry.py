@@ -30,7 +30,7 @@ import numpy as np
 from rigid_gym import _core
 from rigid_gym import quaternion as quat
 from rigid_gym._core import BOX_CORNERS, BOX_EDGES, CAPSULE_CORE_SAMPLES
-from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
+from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Shape, Sphere
 
 GRID_PADDING_CELLS = 2
 INSIDE_OTHER_PART = 1e-9
@@ -92,7 +92,7 @@ def compose(parent: Pose, child: Pose) -> Pose:
                 quat.normalize(quat.multiply(parent.orientation, child.orientation)))
 
 
-def primitives(shape, pose: Pose) -> list[tuple[object, Pose]]:
+def primitives(shape: Shape, pose: Pose) -> list[tuple[Shape, Pose]]:
     """A shape flattened to (primitive, pose) pairs; Compounds are opened recursively."""
     if isinstance(shape, Compound):
         return [p for part, part_pose in shape.parts for p in primitives(part, compose(pose, part_pose))]

@@ -191,7 +191,8 @@ def _compound(compound: Compound, density: float) -> MassProperties:
     return combine([(mass_properties(shape, density), pose) for shape, pose in compound.parts])
 
 
-_EXACT = {Sphere: _sphere, Box: _box, Capsule: _capsule, Mesh: _mesh, Compound: _compound}
+_EXACT: dict[type, Callable[..., MassProperties]] = {
+    Sphere: _sphere, Box: _box, Capsule: _capsule, Mesh: _mesh, Compound: _compound}
 
 
 def mass_properties(shape, density: float) -> MassProperties:
@@ -335,7 +336,7 @@ def principal_axes(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def inverse_moments(moments: np.ndarray) -> np.ndarray:
     """(3,) principal moments, kg m^2 -> (3,) their inverses, 1/(kg m^2), with zero for every
     moment at most :data:`ZERO_MOMENT_TOLERANCE` of the largest one (a rod cannot be spun about
-    its axis, a point mass about any: the notes' slide 4). All zero gives all zero.
+    its axis, a point mass about any). All zero gives all zero.
     """
     m = np.asarray(moments, dtype=np.float64)
     if m.shape != (3,) or not np.all(np.isfinite(m)):

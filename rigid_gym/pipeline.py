@@ -1,4 +1,5 @@
-"""The step, phase by phase (Guendelman, Bridson & Fedkiw 2003, as in DESIGN.md §4).
+"""The step, phase by phase (Guendelman, Bridson & Fedkiw 2003,
+"Nonconvex rigid bodies with stacking"; docs/architecture.md).
 
 :func:`step` runs each phase as one call of the compiled core over every world at once;
 ``SolverConfig`` switches phases off and ``Profile`` times them. Reading it top to bottom is

@@ -1,7 +1,7 @@
 """Unit quaternions on the Python side (vectorised numpy), ordered (w, x, y, z).
 
-The kernels have their own scalar versions in :mod:`rigid_gym.kernels.quaternion`; tests check
-that both agree. These are for building scenes, validating input and analysing results.
+The compiled core has its own scalar versions (``src/math.h``); tests check that both agree.
+These are for building scenes, validating input and analysing results.
 """
 
 from __future__ import annotations
@@ -83,8 +83,8 @@ def from_matrix(r: np.ndarray) -> np.ndarray:
     else:
         s = 2.0 * np.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
         q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
-    q = normalize(np.array(q))
-    return q if q[0] >= 0 else -q
+    unit = normalize(np.array(q))
+    return unit if unit[0] >= 0 else -unit
 
 
 def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:

@@ -19,9 +19,12 @@ Shapes are ``rigid_gym.shapes`` shapes; colours are (r, g, b) in [0, 1].
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from rigid_gym.world import World
 
 
 @dataclass(frozen=True)
@@ -60,7 +63,7 @@ class Series:
 class Recordable(Protocol):
     """The members an env has for ``RecordRerun`` to record it (see the module docstring)."""
 
-    world: object
+    world: World
     camera_view: tuple
     scalar_series: tuple
 

@@ -158,7 +158,7 @@ class RecordRerun(gym.Wrapper):
             observation, reward, terminated, truncated, info = self.env.step(action)
             if self._recording is not None:
                 self._step += 1
-                self._record_step(action, reward, info)
+                self._recording.record(self._step, self.recordable.scalars(action, reward, info))
         except BaseException:
             self._end_episode(wait=True)
             raise
@@ -212,9 +212,6 @@ class RecordRerun(gym.Wrapper):
             self._layout = (task.world.scene, key)
         return self._layout[1]
 
-    def _record_step(self, action, reward, info) -> None:
-        self._recording.record(self._step, self.recordable.scalars(action, reward, info))
-
     def _end_episode(self, wait: bool = False) -> None:
         """Hand the episode's file over to the writer; ``wait`` until it is written. Waiting
         raises no file's error (it runs while an exception propagates, which goes first):
@@ -231,7 +228,7 @@ def blueprint_of(path: str | os.PathLike) -> Path | None:
     (``<application id>.rbl`` in its folder), or None if there is none or ``path`` is not a
     readable rerun file."""
     try:
-        recordings = RrdReader(path).recordings()
+        recordings = RrdReader(os.fspath(path)).recordings()
     except (OSError, RuntimeError, ValueError):
         return None
     for recording in recordings:

@@ -60,7 +60,7 @@ from pathlib import Path
 try:
     import fcntl  # Unix only
 except ImportError:
-    fcntl = None
+    fcntl = None  # type: ignore[assignment]  # _widen's AttributeError path
 
 import numpy as np
 import rerun as rr
@@ -69,9 +69,10 @@ from rerun.chunk import Chunk, ChunkStore
 
 from rigid_gym import quaternion as quat
 from rigid_gym._core import STATIC
+from rigid_gym.geometry import primitives
 from rigid_gym.render import body_colors, corner_normals, tessellate
 from rigid_gym.scene import Scene
-from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
+from rigid_gym.shapes import Box, Capsule, Mesh, Plane, Pose, Sphere
 
 PIPE_BYTES = 1 << 20
 """bytes the pipe to the writer holds (Linux's default is 64 KiB): ~70 files of 50-step
@@ -106,7 +107,9 @@ class Writer:
         self.process = subprocess.Popen([sys.executable, "-m", "rigid_gym.recording_writer"],
                                         stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                                         process_group=0)
-        _widen(self.process.stdin)
+        assert self.process.stdin is not None and self.process.stdout is not None  # PIPEs
+        self.input, self.output = self.process.stdin, self.process.stdout
+        _widen(self.input)
         self.layouts = 0
         self.pending: list[tuple] = []
         self.failures: dict[str, tuple] = {}
@@ -132,8 +135,8 @@ class Writer:
         behind by ``PIPE_BYTES``, or 64 KiB where the pipe could not be widened)."""
         batch, self.pending = self.pending, []
         try:
-            self.process.stdin.write(pickle.dumps(batch, protocol=pickle.HIGHEST_PROTOCOL))
-            self.process.stdin.flush()
+            self.input.write(pickle.dumps(batch, protocol=pickle.HIGHEST_PROTOCOL))
+            self.input.flush()
         except (BrokenPipeError, ValueError) as error:  # ValueError: the pipe was closed
             raise RuntimeError(self._ended()) from error
 
@@ -144,7 +147,7 @@ class Writer:
         errors of other files are kept for their recorders."""
         self.send("sync", flush=True)
         try:
-            failures = pickle.load(self.process.stdout)
+            failures = pickle.load(self.output)
         except EOFError:
             raise RuntimeError(self._ended()) from None
         for path, *failure in failures:
@@ -163,11 +166,11 @@ class Writer:
         if self.process.poll() is None:
             try:
                 self.send("stop", flush=True)
-                self.process.stdin.close()
+                self.input.close()
             except RuntimeError:
                 pass  # it ended already: its error is on standard error
         self.process.wait()
-        for pipe in (self.process.stdin, self.process.stdout):
+        for pipe in (self.input, self.output):
             try:
                 pipe.close()
             except BrokenPipeError:  # a dead writer's unsent bytes
@@ -469,24 +472,13 @@ def _geometry(shape, pose: Pose, rgba: np.ndarray) -> list:
     """The archetypes that draw ``shape`` placed at ``pose`` in an entity's frame, in colour
     ``rgba`` (4,) uint8, to be logged as one static row: a Compound's parts are flattened,
     and primitives of a kind share one archetype (its instances placed by their poses)."""
-    leaves = _primitives(shape, pose)
+    leaves = primitives(shape, pose)
     archetypes = []
     for kind, build in _ARCHETYPES:
         parts = [(s, p) for s, p in leaves if isinstance(s, kind)]
         if parts:
             archetypes.append(build(parts, rgba))
     return archetypes
-
-
-def _primitives(shape, pose: Pose) -> list:
-    """(shape, Pose) of every primitive of ``shape`` placed at ``pose`` (Compounds flattened,
-    their part poses composed with ``pose``)."""
-    if not isinstance(shape, Compound):
-        return [(shape, pose)]
-    return [leaf for part, part_pose in shape.parts
-            for leaf in _primitives(part, Pose(pose.apply(part_pose.position),
-                                               quat.multiply(pose.orientation,
-                                                             part_pose.orientation)))]
 
 
 def _boxes(parts: list, rgba: np.ndarray) -> rr.Boxes3D:
@@ -580,12 +572,13 @@ def _blueprint(camera, series: tuple, grid: bool) -> rrb.Blueprint:
         eye, target, _ = camera
         controls = rrb.EyeControls3D(position=eye, look_target=target,
                                      tracking_entity=f"/{CAMERA_ENTITY}")
-    view = rrb.Spatial3DView(origin="/world", name="scene", eye_controls=controls,
-                             line_grid=grid)
+    scene = rrb.Spatial3DView(origin="/world", name="scene", eye_controls=controls,
+                              line_grid=grid)
+    view: rrb.Spatial3DView | rrb.Horizontal = scene
     if series:
         plots = rrb.Vertical(*(rrb.TimeSeriesView(origin=f"/{name}", name=name)
                                for name, _, _ in series))
-        view = rrb.Horizontal(view, plots, column_shares=[3, 1])
+        view = rrb.Horizontal(scene, plots, column_shares=[3, 1])
     return rrb.Blueprint(view, rrb.BlueprintPanel(state="collapsed"),
                          rrb.SelectionPanel(state="collapsed"),
                          rrb.TimePanel(timeline="sim_time", play_state="playing"))

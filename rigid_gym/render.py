@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from rigid_gym import _core
 from rigid_gym import quaternion as quat
@@ -64,26 +65,28 @@ NEAR = 1e-3
 """Distance from the eye to the near clipping plane, m."""
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class Camera:
     """A perspective camera looking from ``eye`` (3,) m at ``target`` (3,) m, with ``up`` (3,)
     pointing up on screen (any vector not parallel to the view direction) and a vertical field
     of view of ``fov_deg`` degrees in (0, 180). Pixels are square. The default views a table
-    top about 0.6 m across from the front right, above."""
+    top about 0.6 m across from the front right, above. The vectors are given as any 3 numbers
+    and held as read-only float64 arrays."""
 
-    eye: tuple = (0.45, -0.7, 0.6)
-    target: tuple = (0.0, 0.0, 0.05)
-    up: tuple = (0.0, 0.0, 1.0)
-    fov_deg: float = 45.0
+    eye: np.ndarray
+    target: np.ndarray
+    up: np.ndarray
+    fov_deg: float
 
-    def __post_init__(self):
-        for field in ("eye", "target", "up"):
-            value = vector(getattr(self, field), 3, f"Camera.{field}")
+    def __init__(self, eye: ArrayLike = (0.45, -0.7, 0.6), target: ArrayLike = (0.0, 0.0, 0.05),
+                 up: ArrayLike = (0.0, 0.0, 1.0), fov_deg: float = 45.0):
+        for field, given in (("eye", eye), ("target", target), ("up", up)):
+            value = vector(given, 3, f"Camera.{field}")
             value.setflags(write=False)
             object.__setattr__(self, field, value)
-        fov = number(self.fov_deg, "Camera.fov_deg")
+        fov = number(fov_deg, "Camera.fov_deg")
         if not 0.0 < fov < 180.0:
-            raise ValueError(f"Camera.fov_deg: must be in (0, 180) degrees, got {self.fov_deg!r}")
+            raise ValueError(f"Camera.fov_deg: must be in (0, 180) degrees, got {fov_deg!r}")
         object.__setattr__(self, "fov_deg", fov)
         forward = self.target - self.eye
         if not np.linalg.norm(forward) > 0.0:

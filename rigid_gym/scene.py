@@ -6,7 +6,7 @@
 
 Poses given to ``add_body`` are those of the shape's own frame (the frame its vertices or
 axes are defined in). Internally a body is stored at its centre of mass, in its principal
-frame (course notes slide 3); for primitives and any shape whose inertia is already diagonal
+frame; for primitives and any shape whose inertia is already diagonal
 about its origin the two frames coincide. ``BodySpec.body_from_shape`` maps one to the other.
 """
 
@@ -32,7 +32,7 @@ class BodySpec:
     """One validated body. Arrays are float64; poses are of the principal (body) frame.
 
     shape: the body's shape, in its shape frame.
-    motion: STATIC, KINEMATIC or DYNAMIC (see ``rigid_gym.kernels.integrate``).
+    motion: STATIC, KINEMATIC or DYNAMIC (``rigid_gym._core``; ``src/integrate.h``).
     mass: kg (inf for static and kinematic bodies).
     principal_moments: (3,) kg m^2 about the centre of mass, principal axes (0 if not dynamic).
     body_from_shape: Pose of the shape frame in the body frame (centre of mass at the origin).

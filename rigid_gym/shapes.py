@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from rigid_gym import _core
 from rigid_gym import quaternion as quat
@@ -39,14 +40,15 @@ class Sphere:
         return -r, r
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Box:
-    """A box with ``half_extents`` (3,) in m along the shape frame's axes, centred on its origin."""
+    """A box with ``half_extents`` (3,) in m along the shape frame's axes, centred on its origin
+    (given as any 3 numbers, held as a read-only float64 array)."""
 
-    half_extents: tuple[float, float, float]
+    half_extents: np.ndarray
 
-    def __post_init__(self):
-        h = finite_array(self.half_extents, (3,), "Box.half_extents")
+    def __init__(self, half_extents: ArrayLike):
+        h = finite_array(half_extents, (3,), "Box.half_extents")
         if np.any(h <= 0.0):
             raise ValueError(f"Box.half_extents: every entry must be > 0, got {h.tolist()}")
         object.__setattr__(self, "half_extents", h)
@@ -188,16 +190,18 @@ def _check_closed(triangles: np.ndarray) -> None:
             )
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, init=False)
 class Pose:
-    """A rigid placement: ``position`` (3,) m and unit ``orientation`` quaternion (w, x, y, z)."""
+    """A rigid placement: ``position`` (3,) m and unit ``orientation`` quaternion (w, x, y, z)
+    (given as any 3 and 4 numbers, held as read-only float64 arrays)."""
 
-    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    orientation: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 0.0)
+    position: np.ndarray
+    orientation: np.ndarray
 
-    def __post_init__(self):
-        object.__setattr__(self, "position", finite_array(self.position, (3,), "Pose.position"))
-        q = finite_array(self.orientation, (4,), "Pose.orientation")
+    def __init__(self, position: ArrayLike = (0.0, 0.0, 0.0),
+                 orientation: ArrayLike = (1.0, 0.0, 0.0, 0.0)):
+        object.__setattr__(self, "position", finite_array(position, (3,), "Pose.position"))
+        q = finite_array(orientation, (4,), "Pose.orientation")
         quat.check_unit(q, "Pose.orientation")
         object.__setattr__(self, "orientation", q)
 
@@ -254,9 +258,12 @@ class Compound:
             box = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
                             for z in (lo[2], hi[2])])
             corners.append(pose.apply(box))
-        corners = np.concatenate(corners)
-        return corners.min(axis=0), corners.max(axis=0)
+        points = np.concatenate(corners)
+        return points.min(axis=0), points.max(axis=0)
 
 
 SOLID_SHAPES = (Sphere, Box, Capsule, Mesh, Compound)
 """Shapes with a volume (and so a mass); Plane is for static bodies only."""
+
+Shape = Sphere | Box | Capsule | Plane | Mesh | Compound
+"""Any shape (for annotations)."""

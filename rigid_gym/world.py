@@ -106,7 +106,7 @@ class World:
         self.scene = scene
         self.dt = dt
         self.batched = num_worlds is not None
-        self.num_worlds = int(num_worlds) if self.batched else 1
+        self.num_worlds = 1 if num_worlds is None else int(num_worlds)
         self.config = SolverConfig.for_scene(scene) if config is None else config
         self._config_from_scene = config is None
         if not isinstance(profile, bool):

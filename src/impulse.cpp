@@ -1,4 +1,4 @@
-// Point impulses of slides 17-23 (impulse.h).
+// Point impulses (impulse.h: Guendelman, Bridson & Fedkiw 2003).
 #include "impulse.h"
 
 #include <algorithm>
@@ -36,7 +36,7 @@ Vec3 frictionless_impulse(const Mat3& k, Vec3 n, double vn, double e) {
     return scale(jn, n);
 }
 
-// The impulse of Newton's restitution with Coulomb friction (slides 20-23), before the energy
+// The impulse of Newton's restitution with Coulomb friction, before the energy
 // check of contact_impulse.
 Vec3 friction_impulse(const Mat3& k, Vec3 v, Vec3 n, double vn, double e, double mu) {
     // static friction: the impulse that leaves -e v_n n

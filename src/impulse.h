@@ -1,13 +1,15 @@
-// The collision impulse at one contact point (course notes slides 17-23).
+// The collision impulse at one contact point, with restitution and Coulomb friction
+// (Guendelman, Bridson & Fedkiw 2003, "Nonconvex rigid bodies with stacking", after Mirtich &
+// Canny 1995 and Moore & Wilhelms 1988).
 //
 // At contact point x with normal n (from body 2 to body 1), r_i = x - X_i and
-//     K_i = (1/M_i) 1 + r_i*^T I_i^-1 r_i*        (slide 19; zero for an infinite mass)
+//     K_i = (1/M_i) 1 + r_i*^T I_i^-1 r_i*        (zero for an infinite mass)
 // the relative velocity v = v_1 - v_2 (v_i = V_i + omega_i x r_i), v_n = v.n. Only approaching
 // contacts (v_n < 0) get an impulse j, +j on body 1 and -j on body 2:
-//     frictionless      j = -(1 + e) v_n / (n^T K n) n                          (slide 19)
-//     static friction   j = K^-1 (-v - e v_n n)   if |j_t| <= mu j_n (the cone)  (slides 20-21)
+//     frictionless      j = -(1 + e) v_n / (n^T K n) n
+//     static friction   j = K^-1 (-v - e v_n n)   if |j_t| <= mu j_n (the cone)
 //     sliding friction  j = j_n (n - mu T), T = v_t / |v_t|,
-//                       j_n = -(1 + e) v_n / (n^T K (n - mu T))                  (slides 22-23)
+//                       j_n = -(1 + e) v_n / (n^T K (n - mu T))
 // with K = K_1 + K_2. A non-positive sliding denominator (large mu with coupling, a
 // Painleve-type case) falls back to the static impulse, which always removes the approach.
 // Newton's restitution with Coulomb friction is not energy-consistent: where K couples normal

@@ -1,7 +1,8 @@
-// Time integration of free motion (course notes slides 10-16; Buss, JCP 164, 2000).
+// Time integration of free motion (Guendelman, Bridson & Fedkiw 2003; Buss, "Accurate and
+// efficient simulation of rigid-body rotations", J. Comput. Phys. 164, 2000).
 //
 // Linear motion is symplectic Euler: V += dt (g + F/M), X += dt V_new. Angular: L += dt tau,
-// then q is advanced by the exact rotation of slide 13 with an effective angular velocity
+// then q is advanced by the exact rotation through omega_bar h with an effective angular velocity
 // omega_bar:
 //     order 1: omega_bar = omega
 //     order 2: omega_bar = omega + h/2 alpha                            (Buss's second order)
@@ -15,10 +16,10 @@
 // omega, so its torque stays in L alone (symplectic Euler, as the force in V) and alpha keeps
 // only the gyroscopic part L x omega: adding the torque's share again, or taking it away,
 // slides a block tipping about its edge by millimetres.
-// A step is cut into sub-steps of at most a quarter turn (|omega| h <= pi/2, slide 14), and into
+// A step is cut into sub-steps of at most a quarter turn (|omega| h <= pi/2), and into
 // at most MAX_ROTATION_SUBSTEPS of them: beyond 64 quarter turns a step (|omega| > 32 pi / dt,
 // 24,127 rad/s at dt = 1/240 s) each sub-step turns further, so a step's cost stays bounded
-// whatever the speed. The exact rotation of slide 13 is still exact for a constant omega (a
+// whatever the speed. The exact rotation is still exact for a constant omega (a
 // sphere, a symmetric top about its axis); what grows is the error of the effective angular
 // velocity over the longer sub-steps (a tumbling asymmetric body), and L stays exact.
 #pragma once

@@ -4,7 +4,7 @@
 // Every operation spells out its arithmetic in one fixed order: results must be bit-for-bit
 // repeatable (no -ffast-math, no FMA contraction: see CMakeLists.txt), so the order of each
 // sum is part of the contract. Quaternions are (w, x, y, z); a rotation matrix's columns are
-// the rotated body axes (course notes, slide 15). The types are laid out like the numpy rows
+// the rotated body axes. The types are laid out like the numpy rows
 // they are read from: Vec3 as float64 (3,), Quat as (4,), Mat3 as (3, 3) in C order.
 #pragma once
 
@@ -80,7 +80,7 @@ inline Vec3 to_local(Vec3 x, const Mat3& r, Vec3 p) {
     return rotate_inverse(r, sub(p, x));
 }
 
-// The rotation matrix of unit quaternion q (slide 15).
+// The rotation matrix of unit quaternion q.
 inline Mat3 rotation_from_quaternion(Quat q) {
     const double w = q.w, x = q.x, y = q.y, z = q.z;
     Mat3 r;
@@ -109,7 +109,7 @@ inline Quat multiply(Quat a, Quat b) {
             a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w};
 }
 
-// (cos|h w/2|, sin|h w/2| w/|w|) q, renormalised (slide 13): exact for an angular velocity w
+// (cos|h w/2|, sin|h w/2| w/|w|) q, renormalised: exact for an angular velocity w
 // (rad/s, world frame) that is constant over h (s).
 inline Quat rotate_by_angular_velocity(Quat q, Vec3 w, double h) {
     const double speed = std::sqrt(w.x * w.x + w.y * w.y + w.z * w.z);
@@ -123,7 +123,7 @@ inline Quat rotate_by_angular_velocity(Quat q, Vec3 w, double h) {
     return normalize(multiply(d, q));
 }
 
-// I(t)^-1 = R diag(inverse_moments) R^T (slide 3), formed once where it is applied often.
+// I(t)^-1 = R diag(inverse_moments) R^T, formed once where it is applied often.
 inline Mat3 inverse_inertia(const Mat3& r, Vec3 inverse_moments) {
     Mat3 w;
     for (int i = 0; i < 3; ++i) {
@@ -136,7 +136,7 @@ inline Mat3 inverse_inertia(const Mat3& r, Vec3 inverse_moments) {
     return w;
 }
 
-// I(t)^-1 v = R diag(inverse_moments) R^T v (slide 3); inverse_moments 1/kg m^2, 0 on a
+// I(t)^-1 v = R diag(inverse_moments) R^T v; inverse_moments 1/kg m^2, 0 on a
 // degenerate axis.
 inline Vec3 apply_inverse_inertia(const Mat3& r, Vec3 inverse_moments, Vec3 v) {
     const Vec3 b = rotate_inverse(r, v);

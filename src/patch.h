@@ -9,7 +9,7 @@
 //     unknowns   j (3) and m along the patch's constrained rotations D:
 //                a face: tip about t1, t2 and spin about n; an edge (collinear points) with
 //                direction e: tip about n x e and spin about n; a single point: none
-//     targets    relative velocity at c: -v - e v_n n (the notes' static impulse, slide 21),
+//     targets    relative velocity at c: -v - e v_n n (the static impulse of impulse.h),
 //                relative angular velocity along D: tip -(1 + e) Omega.d, spin -Omega.n
 //     matrix     [dv; dOmega] = A [j; m],  A = sum over movable bodies of
 //                [[1/M + r*^T W r*, r*^T W], [W r*, W]],  W = I(t)^-1, r = c - X
@@ -19,7 +19,7 @@
 // acting at c): |F_t| <= mu F_n (Coulomb cone), |m.n| <= mu F_n rho (torsional friction; rho:
 // the points' mean distance from c), and the centre of pressure c + n x m_t / F_n lies within
 // the patch. If friction cannot hold, the sliding wrench is tried: j = j_n (n - mu T)
-// (slides 22-23) with only the tip constraints, and torsional friction applied afterwards
+// (impulse.h) with only the tip constraints, and torsional friction applied afterwards
 // within its limit. If the centre of pressure would leave the patch the body is tipping over
 // an edge, and the caller falls back to a single impulse.
 #pragma once

@@ -206,7 +206,7 @@ def test_spin_about_a_principal_axis_is_exact_even_far_past_a_quarter_turn():
 @pytest.mark.parametrize("order", [1, 2, 3])
 def test_thin_rod_and_point_mass_spin_without_nan(order):
     """A rod (moments a, a, 0) and a point mass (0, 0, 0) have degenerate tensors: only the
-    nonzero moments are inverted (slide 4), so any spin stays finite. The rod's spin about its
+    nonzero moments are inverted, so any spin stays finite. The rod's spin about its
     axis cannot be represented (it is dropped); its tumbling is torque-free and exact."""
     scene = rg.Scene(gravity=(0.0, 0.0, -9.81))
     rod = scene.add_body(rg.Capsule(0.001, 0.5), mass=1.0, inertia=(1 / 12, 1 / 12, 0.0),
@@ -227,7 +227,9 @@ def test_thin_rod_and_point_mass_spin_without_nan(order):
     assert abs(axis @ world.angular_velocity[rod]) < 1e-12
 
 
-def test_kernel_and_numpy_quaternions_agree():
+def test_core_and_numpy_quaternions_agree():
+    """The core's rotation matrices (src/math.h) are the numpy ones (rigid_gym.quaternion) of
+    the same unit quaternions, and back."""
     rng = np.random.default_rng(0)
     q = quat.normalize(rng.normal(size=(50, 4)))
     scene = rg.Scene()

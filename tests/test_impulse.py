@@ -1,4 +1,4 @@
-"""The impulse at one contact (course notes slides 17-23), checked formula by formula."""
+"""The impulse at one contact (Guendelman, Bridson & Fedkiw 2003), checked formula by formula."""
 
 import numpy as np
 import pytest
@@ -14,7 +14,7 @@ def impulse(k, v, e, mu):
 
 
 def test_point_mass_matrix_of_a_unit_cube_corner():
-    """K = (1/M) 1 + r*^T I^-1 r* (slide 19), built column by column by the core, equals the
+    """K = (1/M) 1 + r*^T I^-1 r*, built column by column by the core, equals the
     matrix product for a unit-mass cube of edge 1 (I = M/6) at the corner r = (1/2, 1/2, -1/2)."""
     k = np.zeros((3, 3))
     inverse_moments = np.full(3, 6.0)

@@ -11,10 +11,7 @@ import time
 
 import pytest
 
-# the real Ray, not a folder named ray that an editable install can expose as a namespace
-# package (scikit-build-core puts the checkout's parent on sys.path for the nested
-# rigid_gym/envs and rigid_gym/agents mappings, and Ray keeps its sessions in /tmp/ray)
-pytest.importorskip("ray.tune")
+pytest.importorskip("ray.tune")  # the tune extra too, which the sweeps use
 import ray  # noqa: E402
 
 

@@ -85,6 +85,25 @@ def test_noisy_copies_draw_the_noise_a_single_env_draws():
     assert not np.array_equal(observation["observation"][0], observation["observation"][1])
 
 
+@pytest.mark.parametrize("task", ["Push", "Stack", "Throw"])
+def test_a_direct_call_of_the_entry_point_gets_the_registered_episode_length(task):
+    """The vector entry point called without ``max_episode_steps`` (as a user or a library
+    may, outside ``gym.make_vec``) truncates episodes where the registered id does: Stack at
+    100 steps, Push and Throw at 50."""
+    from rigid_gym.envs import vector
+
+    envs = getattr(vector, task.lower())(num_envs=2)
+    expected = gym.spec(f"rigid_gym/{task}-v0").max_episode_steps
+    assert envs.max_episode_steps == expected == {"Push": 50, "Stack": 100, "Throw": 50}[task]
+    envs.reset(seed=0)
+    for _ in range(expected - 1):
+        _, _, _, truncated, _ = envs.step(np.zeros(envs.action_space.shape))
+        assert not truncated.any()
+    _, _, _, truncated, _ = envs.step(np.zeros(envs.action_space.shape))
+    assert truncated.all()
+    envs.close()
+
+
 def test_a_non_finite_copy_is_named():
     envs = gym.make_vec("rigid_gym/Push-v0", num_envs=3, vectorization_mode="vector_entry_point")
     envs.reset(seed=0)

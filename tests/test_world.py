@@ -86,7 +86,7 @@ def test_static_ground_never_moves():
 
 
 def test_impulse_off_centre_changes_momentum_and_spin():
-    """j at r from the centre: delta V = j / M, delta L = r x j (slide 18)."""
+    """j at r from the centre: delta V = j / M, delta L = r x j."""
     scene = rg.Scene(gravity=(0, 0, 0))
     scene.add_body(rg.Box((0.5, 0.5, 0.5)), mass=2.0)
     world = rg.World(scene)

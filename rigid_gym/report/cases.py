@@ -20,10 +20,13 @@ from rigid_gym import analytic
 from rigid_gym.report import scenes
 from rigid_gym.report.scenes import G
 
-PASS_SETTINGS = {"default": {}, "2 contact passes": {"contact_passes": 2},
+Settings = dict[str, dict[str, object]]
+"""A case's solver settings: label -> SolverConfig overrides."""
+
+PASS_SETTINGS: Settings = {"default": {}, "2 contact passes": {"contact_passes": 2},
                  "narrow phase every pass": {"detect_every_pass": True}}
-BOUNCE_SETTINGS = {**PASS_SETTINGS, "1 collision pass": {"collision_passes": 1}}
-ROTATION_SETTINGS = {**{f"rotation order {k}": {"rotation_order": k} for k in (1, 2, 3)},
+BOUNCE_SETTINGS: Settings = {**PASS_SETTINGS, "1 collision pass": {"collision_passes": 1}}
+ROTATION_SETTINGS: Settings = {**{f"rotation order {k}": {"rotation_order": k} for k in (1, 2, 3)},
                      "rotation order 2, energy not kept": {"rotation_order": 2,
                                                             "keep_energy": False}}
 
@@ -45,7 +48,7 @@ class Case:
     metrics: tuple[str, ...]
     build: Callable[[], rg.Scene]
     measure: Callable[[rg.World], tuple[float, ...]]
-    settings: dict[str, dict]
+    settings: Settings
     note: str = ""
 
 
@@ -71,7 +74,8 @@ BOUNCES = 3
 def apex_heights(world: rg.World, count: int, radius: float, limit: float) -> np.ndarray:
     """Heights (m) of the ball's lowest point (body 1) at its first ``count`` apexes (where
     v_z turns from > 0 to <= 0), searching at most ``limit`` s; fewer if not all were seen."""
-    found, previous = [], 0.0
+    found: list[float] = []
+    previous = 0.0
     while len(found) < count and world.time < limit:
         world.step()
         v = world.velocity[1, 2]

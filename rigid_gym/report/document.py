@@ -250,7 +250,7 @@ def mass_section(results: Results) -> list[str]:
     return lines
 
 
-def stiff_section(results: Results, causes: dict[str, str]) -> list[str]:
+def stiff_section(results: Results) -> list[str]:
     from rigid_gym.report import stability
 
     failed = [r for r in results.stiff if not r.passed]
@@ -270,8 +270,7 @@ def stiff_section(results: Results, causes: dict[str, str]) -> list[str]:
         for r in failed:
             bad = "; ".join(f"{c.name} = {fmt(c.value, c.unit)} (bound {fmt(c.bound, c.unit)})"
                             for c in r.checks if not c.passed)
-            lines.append(f"- **{r.title}**: {bad}. Cause: "
-                         f"{causes.get(r.key, 'not yet diagnosed.')}")
+            lines.append(f"- **{r.title}**: {bad}.")
         lines.append("")
     lines += ["| case | result | check | value | bound | why this bound |",
               "|---|---|---|---:|---:|---|"]
@@ -331,7 +330,7 @@ def phase_shares(profile: dict) -> str:
     return shares + (f"; off: {', '.join(off)}" if off else "")
 
 
-def write(results: Results, out: Path, causes: dict[str, str]) -> Path:
+def write(results: Results, out: Path) -> Path:
     """Write ``out/report.md`` and its figures; returns the markdown file's path."""
     import matplotlib
 
@@ -351,7 +350,7 @@ def write(results: Results, out: Path, causes: dict[str, str]) -> Path:
              f"{platform.python_version()}; the run took {results.seconds / 60:.1f} min. "
              "Timings depend on the machine and its load; errors do not.", ""]
     lines += accuracy_section(results) + mass_section(results)
-    lines += stiff_section(results, causes) + phase_section(results)
+    lines += stiff_section(results) + phase_section(results)
     path = out / "report.md"
     path.write_text("\n".join(lines))
     return path

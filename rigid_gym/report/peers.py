@@ -24,6 +24,7 @@ spring and damping, so the measured e differs from the scene's.
 from __future__ import annotations
 
 import importlib.util
+from abc import ABC, abstractmethod
 
 import numpy as np
 
@@ -53,7 +54,7 @@ def _check_body(engine: str, body) -> None:
                          "bodies are supported")
 
 
-class PeerWorld:
+class PeerWorld(ABC):
     """What the peer adapters share: the checks, the step count and the state queries.
 
     Subclasses build the scene in ``__init__`` (after ``super().__init__``) and implement
@@ -78,6 +79,22 @@ class PeerWorld:
         self.dynamic = np.array([b.motion == DYNAMIC for b in scene.bodies])
         self.mass = np.array([b.mass if b.motion == DYNAMIC else 0.0 for b in scene.bodies])
         self.moments = np.array([b.principal_moments for b in scene.bodies])
+
+    @abstractmethod
+    def _advance(self, n: int) -> None:
+        """Step the engine ``n`` times."""
+
+    @abstractmethod
+    def reset(self) -> None:
+        """Back to the scene's start."""
+
+    @abstractmethod
+    def _poses(self) -> tuple[np.ndarray, np.ndarray]:
+        """((n, 3) m, (n, 4) w-first quaternions) of every body."""
+
+    @abstractmethod
+    def _velocities(self) -> tuple[np.ndarray, np.ndarray]:
+        """((n, 3) m/s, (n, 3) rad/s world frame) of every body."""
 
     def step(self, n: int = 1) -> None:
         """Advance ``n`` steps of ``dt`` s."""

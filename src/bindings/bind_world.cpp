@@ -149,7 +149,7 @@ void bind_world(nb::module_& m) {
             nb::gil_scoped_release unlocked;
             advance(c, steps, phases, dt);
         },
-        nb::arg("steps"), nb::arg("phases") = static_cast<int>(EVERY_PHASE), nb::arg("dt"),
+        nb::arg("steps"), nb::arg("phases"), nb::arg("dt"),
         "Advance every world by `steps` steps of dt (s), running the phases whose bits are set "
         "(src/step.h); the GIL is released meanwhile.");
     cls.def(
