@@ -21,6 +21,7 @@ Saved models load as plain SAC of their learner (``rigid-gym evaluate``): the po
 from __future__ import annotations
 
 from functools import partial
+from typing import Any
 
 import numpy as np
 import torch as th
@@ -36,6 +37,15 @@ class DemoBuffer:
     (mixed in before the learner's SAC). bc_weight: the BC term's weight in the actor loss
     (0: plain SAC); bc_batch_size: demo samples per gradient step; q_filter: False keeps every
     demo sample; bc_relabel: HER-relabel the demo samples' goals as the replay buffer does."""
+
+    # what the learner's SAC, after this mixin in the method order, provides
+    replay_buffer_kwargs: dict
+    replay_buffer_class: type | None
+    env: Any
+    observation_space: Any
+    action_space: Any
+    device: Any
+    n_envs: int
 
     def __init__(self, *args, bc_weight: float = 1.0, bc_batch_size: int = 128,
                  q_filter: bool = True, bc_relabel: bool = False, **kwargs):
@@ -59,7 +69,8 @@ class DemoBuffer:
         return self.demo_buffer
 
     def _excluded_save_params(self) -> list[str]:
-        return super()._excluded_save_params() + ["demo_buffer"]
+        # the learner's SAC, after this mixin in the method order, defines it
+        return super()._excluded_save_params() + ["demo_buffer"]  # type: ignore[misc]
 
 
 class BCSAC(DemoBuffer, SAC):

@@ -108,8 +108,9 @@ def play(env: gym.Env, act: Callable[[dict], np.ndarray], seeds: list[int | None
     if not 0.0 <= noise <= 10.0:
         raise ValueError(f"dataset: noise must be in [0, 10] (action units), got {noise!r}")
     space = env.action_space
+    assert isinstance(space, gym.spaces.Box)  # every task acts in a box
     rng = rng if rng is not None else np.random.default_rng(0)
-    episodes = []
+    episodes: list[EpisodeBuffer] = []
     for seed in seeds:
         obs, info = env.reset(seed=seed)
         observations, actions, rewards = [obs], [], []
@@ -344,7 +345,7 @@ def replay_episode(env: gym.Env, episode, seed: int | None) -> Replay:
         stored = (episode.rewards[t], episode.terminations[t], episode.truncations[t])
         for name, value, expected in zip(("reward", "termination", "truncation"),
                                          (reward, terminated, truncated), stored):
-            if not np.array_equal(value, expected):
+            if not np.array_equal(np.asarray(value), expected):
                 mismatch = f"{name} at step {t + 1}: {value!r}, stored {expected!r}"
                 break
         mismatch = mismatch or differs(t + 1, obs, info)

@@ -70,7 +70,9 @@ def load_model(path: str | Path, env: gym.Env, algo: str | None = None):
         found = None
     if found is not None and found.startswith("sbx:"):  # SBX's zips load only into SBX's classes
         algo = found
-    cls = find_algorithm(algo or found)
+    name = algo or found
+    assert name is not None  # found is None only where algo was given
+    cls = find_algorithm(name)
     try:
         return cls.load(path, env=env, device="cpu")
     except ValueError as exc:  # spaces that differ from the env's

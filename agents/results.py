@@ -145,7 +145,7 @@ def plot_task(task: str, groups: dict[tuple[str, str], list[dict]], path: Path) 
 
 def plot_curves(results: list[dict], folder: Path) -> list[Path]:
     """``curve_<task>.png`` in ``folder`` for every task of ``results``; returns the paths."""
-    by_task = defaultdict(dict)
+    by_task: dict[str, dict] = defaultdict(dict)
     for (env_id, name), runs in grouped(results).items():
         by_task[env_id.split("/")[-1].split("-v")[0].removesuffix("Dense")][(env_id, name)] = runs
     folder.mkdir(parents=True, exist_ok=True)

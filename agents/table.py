@@ -21,6 +21,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import TextIO
 
 RECIPES = {
     "push": [("rigid_gym/Push-v0", "sac"), ("rigid_gym/Push-v0", "ppo")],
@@ -108,14 +109,14 @@ def launch(entries: list[dict], jobs: int, runs: Path, results: Path,
     """Run the entries not done, at most ``jobs`` processes at once; returns the number that
     failed (their logs say why)."""
     todo = [e for e in entries if e["state"] != "done"]
-    running: list[tuple[subprocess.Popen, dict, object]] = []
+    running: list[tuple[subprocess.Popen, dict, TextIO]] = []
     failed = 0
     runs.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, **ONE_THREAD}
     while todo or running:
         while todo and len(running) < jobs:
             e = todo.pop(0)
-            log = open(runs / f"{e['name']}.log", "a")
+            log: TextIO = open(runs / f"{e['name']}.log", "a")
             command = [sys.executable, "-m", "rigid_gym.agents.table", "--one", e["env_id"],
                        e["algo"], str(e["seed"]), "--runs", str(runs), "--results",
                        str(results), "--checkpoint-freq", str(checkpoint_freq)]

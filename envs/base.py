@@ -201,7 +201,8 @@ def task_spaces(task: Task, pixels: PixelOptions) -> tuple[spaces.Dict, spaces.B
     says (its obs_mode and frame size)."""
     size = 6 + int(task.has_grip) + OBJECT_FEATURES * task.num_cubes
     vector = lambda n: spaces.Box(-np.inf, np.inf, shape=(n,), dtype=np.float32)  # noqa: E731
-    keys = {"achieved_goal": vector(task.goal_size), "desired_goal": vector(task.goal_size)}
+    keys: dict[str, spaces.Space] = {"achieved_goal": vector(task.goal_size),
+                                     "desired_goal": vector(task.goal_size)}
     if pixels.state:
         keys["observation"] = vector(size)
     if pixels.pixels:

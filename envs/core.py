@@ -232,7 +232,7 @@ class TaskBatch:
         if self.options.reward_type == "sparse":
             rewards = successes - 1.0  # the sparse reward, from the test just made
         elif self.options.reward_type == "shaped":
-            held = self.gripper.held[copies] if self.task.has_grip \
+            held = gripper.held[copies] if self.task.has_grip \
                 else np.full(len(worlds), -1, dtype=np.int64)
             rewards = np.where(successes, 1.0, self.task.shaped_reward(
                 pad, held, achieved64, desired64, self.half[copies]))
