@@ -7,6 +7,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+import torch as th
 
 from rigid_gym.agents.evaluate import evaluate, load_model
 from rigid_gym.agents.train import (DEMO_SEED, RESULT_KEYS, add_demonstrations, load_hyperparams,
@@ -183,10 +184,21 @@ def test_bc_sac_keeps_the_demonstrations_apart_and_clones_them():
     model.train(gradient_steps=200, batch_size=32)
     assert error() < 0.5 * before  # the BC term dominates: the actor imitates the demos
     assert "train/bc_loss" in model.logger.name_to_value
-    # the Q-filter keeps only samples the critic rates above the policy's action
+    # the Q-filter keeps only samples the critic rates above the policy's action: recomputed
+    # here from the same demo batch (the buffer samples with numpy's global generator)
     model.q_filter = True
+    np.random.seed(3)
     loss, kept = model._bc_loss()
-    assert 0.0 <= kept <= 1.0 and loss.item() >= 0.0
+    np.random.seed(3)
+    batch = demo.sample(model.bc_batch_size)
+    with th.no_grad():
+        action = model.actor(batch.observations, deterministic=True)
+        q_demo = th.cat(model.critic(batch.observations, batch.actions), dim=1).min(dim=1).values
+        q_pi = th.cat(model.critic(batch.observations, action), dim=1).min(dim=1).values
+    keep = (q_demo > q_pi).numpy()
+    error = ((action - batch.actions) ** 2).sum(dim=1).numpy()
+    assert kept == pytest.approx(keep.mean())
+    assert loss.item() == pytest.approx(error[keep].mean() if keep.any() else 0.0, rel=1e-5)
 
 
 def test_a_run_resumes_from_its_newest_checkpoint(tmp_path):
