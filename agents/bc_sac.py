@@ -25,11 +25,10 @@ from typing import Any
 
 import numpy as np
 import torch as th
-from torch.nn import functional as F
-
 from stable_baselines3 import SAC, HerReplayBuffer
 from stable_baselines3.common.buffers import ReplayBuffer
 from stable_baselines3.common.utils import polyak_update
+from torch.nn import functional as F
 
 
 class DemoBuffer:

@@ -35,13 +35,12 @@ import os
 import subprocess
 import tempfile
 import warnings
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Callable, Iterator
 
 import gymnasium as gym
-import numpy as np
-
 import minari
+import numpy as np
 from minari import MinariDataset
 from minari.data_collector import EpisodeBuffer
 

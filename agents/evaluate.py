@@ -19,10 +19,10 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-
-import rigid_gym  # noqa: F401  (registers the env ids)
 from rigid_gym.agents.algorithms import algorithm_of, find_algorithm
 from rigid_gym.agents.progress import bar
+
+import rigid_gym  # noqa: F401  (registers the env ids)
 
 EVAL_SEED = 1_000_000
 """Evaluation episodes use seeds EVAL_SEED, EVAL_SEED + 1, ...; training uses small seeds."""

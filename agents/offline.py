@@ -15,10 +15,9 @@ import argparse
 
 import numpy as np
 import torch as th
-from torch import nn
-
 from rigid_gym.agents.datasets import load
 from rigid_gym.agents.evaluate import success_rate
+from torch import nn
 
 INPUTS = ("observation", "desired_goal")
 """The observation entries the policy reads (achieved_goal is inside ``observation``)."""

@@ -34,7 +34,6 @@ import time
 from pathlib import Path
 
 import yaml
-
 from rigid_gym.agents.results import plot_task, table
 from rigid_gym.agents.train import train
 

@@ -38,22 +38,20 @@ import shutil
 import sys
 import time
 import warnings
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import gymnasium as gym
 import numpy as np
 import yaml
-
+from rigid_gym.agents.algorithms import algorithm_class, learner_for
+from rigid_gym.agents.evaluate import success_rate
+from rigid_gym.agents.progress import note
+from rigid_gym.agents.vec_env import SB3VecEnv
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList
-from stable_baselines3.common.env_util import make_vec_env
 from stable_baselines3.common.vec_env import VecCheckNan, VecMonitor
 
 import rigid_gym  # noqa: F401  (registers the env ids)
-from rigid_gym.agents.algorithms import algorithm_class, learner_for
-from rigid_gym.agents.evaluate import success_rate
-from rigid_gym.agents.progress import bar, note
-from rigid_gym.agents.vec_env import SB3VecEnv
 
 HYPERPARAMS = Path(__file__).with_name("hyperparams.yml")
 RESULT_KEYS = ("env_id", "algo", "seed", "env_steps", "wall_s", "cpu_s", "episodes", "success",

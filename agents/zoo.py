@@ -20,11 +20,10 @@ from __future__ import annotations
 
 import inspect
 
-from stable_baselines3 import SAC
-from stable_baselines3.common.callbacks import BaseCallback
-
 from rigid_gym.agents.bc_sac import BCSAC
 from rigid_gym.agents.train import add_demonstrations, hyperparams_table
+from stable_baselines3 import SAC
+from stable_baselines3.common.callbacks import BaseCallback
 
 ZOO_ALGOS = {"sac": ("sac", "tqc"), "tqc": ("tqc", "sac"), "bc_sac": ("sac", "tqc"),
              "ppo": ("ppo",)}

@@ -23,9 +23,9 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from rigid_gym.envs.scripted import scripted_policy
 
 import rigid_gym  # noqa: F401  (registers the ids)
-from rigid_gym.envs.scripted import scripted_policy
 
 TASKS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
 PANDA_PUSH = "PandaPush-v3"

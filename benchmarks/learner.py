@@ -27,12 +27,12 @@ os.environ.setdefault("OMP_NUM_THREADS", "1")
 os.environ.setdefault("XLA_FLAGS", "--xla_cpu_multi_thread_eigen=false "
                                    "intra_op_parallelism_threads=1")
 
-import argparse  # noqa: E402
-import statistics  # noqa: E402
-import time  # noqa: E402
+import argparse
+import statistics
+import time
 
-from rigid_gym.agents.algorithms import learner_available, learner_for  # noqa: E402
-from rigid_gym.agents.train import build_model, load_hyperparams  # noqa: E402
+from rigid_gym.agents.algorithms import learner_available, learner_for
+from rigid_gym.agents.train import build_model, load_hyperparams
 
 DEFAULT = ["sb3:64:1:1", "sbx:64:1:1", "sbx:256:1:1", "sbx:64:4:4", "sbx:64:8:8",
            "sbx:64:8:4", "sbx:256:8:2", "sbx:256:8:8"]

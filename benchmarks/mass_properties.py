@@ -21,7 +21,8 @@ errors partly cancel (sphere, capsule).
 
 from rigid_gym.inertia import mass_properties, mass_properties_grid, mass_properties_monte_carlo
 from rigid_gym.meshes import box_mesh, l_shape_mesh
-from rigid_gym.report.accuracy import inertia_errors as errors, median_seconds, observed_order
+from rigid_gym.report.accuracy import inertia_errors as errors
+from rigid_gym.report.accuracy import median_seconds, observed_order
 from rigid_gym.shapes import Box, Capsule, Sphere
 
 DENSITY = 1000.0  # kg/m^3

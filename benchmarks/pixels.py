@@ -136,7 +136,6 @@ def frame_cpu_microseconds(env_id: str, repeats: int, frames: int = 1000) -> flo
 def save_frames(folder: Path) -> None:
     """Write each task's pixels observation after FRAME_STEPS scripted steps (seed 1)."""
     import matplotlib.pyplot as plt
-
     from rigid_gym.envs.scripted import scripted_policy
 
     folder.mkdir(parents=True, exist_ok=True)

@@ -32,9 +32,9 @@ import time
 from pathlib import Path
 
 import gymnasium as gym
+from rigid_gym.envs.scripted import scripted_policy
 
 import rigid_gym  # noqa: F401  (registers the ids)
-from rigid_gym.envs.scripted import scripted_policy
 from rigid_gym.recording import RecordRerun
 from rigid_gym.recording_writer import writer
 

@@ -48,11 +48,11 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from rigid_gym._core import DYNAMIC
+from rigid_gym.envs.scripted import scripted_policy
 
 import rigid_gym as rg
 from rigid_gym import _core
-from rigid_gym._core import DYNAMIC
-from rigid_gym.envs.scripted import scripted_policy
 from rigid_gym.report import peers
 from rigid_gym.report.scenes import cube_stack, pile, pyramid
 

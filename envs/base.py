@@ -21,12 +21,12 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from gymnasium.error import ResetNeeded
-
-from rigid_gym.recordable import Series
 from rigid_gym.envs.core import ALL, TaskBatch
 from rigid_gym.envs.options import ARGUMENTS_TABLE, Options, checked_actions
 from rigid_gym.envs.pixels import DEFAULT_SIZE, PixelOptions
 from rigid_gym.envs.task import OBJECT_FEATURES, STEP_TIME, Task
+
+from rigid_gym.recordable import Series
 
 if TYPE_CHECKING:
     from rigid_gym.render import Renderer
@@ -200,7 +200,7 @@ def task_spaces(task: Task, pixels: PixelOptions) -> tuple[spaces.Dict, spaces.B
     """The observation and action spaces of one copy of ``task`` observed as ``pixels``
     says (its obs_mode and frame size)."""
     size = 6 + int(task.has_grip) + OBJECT_FEATURES * task.num_cubes
-    vector = lambda n: spaces.Box(-np.inf, np.inf, shape=(n,), dtype=np.float32)  # noqa: E731
+    vector = lambda n: spaces.Box(-np.inf, np.inf, shape=(n,), dtype=np.float32)
     keys: dict[str, spaces.Space] = {"achieved_goal": vector(task.goal_size),
                                      "desired_goal": vector(task.goal_size)}
     if pixels.state:

@@ -20,16 +20,25 @@ from typing import NamedTuple
 
 import numpy as np
 from gymnasium.error import ResetNeeded
-
 from rigid_gym._core import gather_observations
-from rigid_gym.scene import Scene
-from rigid_gym.shapes import Box
-from rigid_gym.world import World
 from rigid_gym.envs.effector import SuctionGripper, Workspace
 from rigid_gym.envs.options import Options
 from rigid_gym.envs.pixels import CopyFrames
-from rigid_gym.envs.task import (CUBE_HALF, CUBE_MASS, FRICTION, GRIPPER_START, OBJECT_FEATURES,
-                                 ROTATION_FEATURES, SOLVER_STEPS, STEP_TIME, Task)
+from rigid_gym.envs.task import (
+    CUBE_HALF,
+    CUBE_MASS,
+    FRICTION,
+    GRIPPER_START,
+    OBJECT_FEATURES,
+    ROTATION_FEATURES,
+    SOLVER_STEPS,
+    STEP_TIME,
+    Task,
+)
+
+from rigid_gym.scene import Scene
+from rigid_gym.shapes import Box
+from rigid_gym.world import World
 
 ALL = slice(None)
 """Every copy of a batch, where methods take the copies to act on."""
@@ -286,11 +295,11 @@ def observation_index(bodies: int, pad: int, cubes: list[int],
     position minus the pad's, the first two columns of its rotation (ROTATION_FEATURES), its
     velocity and angular velocity."""
     n = bodies
-    position = lambda b: [3 * b + i for i in range(3)]  # noqa: E731
-    velocity = lambda b: [3 * n + 3 * b + i for i in range(3)]  # noqa: E731
-    columns = lambda b: [6 * n + 9 * b + 3 * row + column  # noqa: E731
+    position = lambda b: [3 * b + i for i in range(3)]
+    velocity = lambda b: [3 * n + 3 * b + i for i in range(3)]
+    columns = lambda b: [6 * n + 9 * b + 3 * row + column
                          for column in range(ROTATION_FEATURES // 3) for row in range(3)]
-    spin = lambda b: [15 * n + 3 * b + i for i in range(3)]  # noqa: E731
+    spin = lambda b: [15 * n + 3 * b + i for i in range(3)]
     index = position(pad) + velocity(pad) + ([0] if grip else [])
     first = len(index)
     minus = [-1] * first

@@ -22,8 +22,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-
 from rigid_gym._core import command_pads
+
 from rigid_gym.shapes import Box
 
 STEP_DISTANCE = 0.05

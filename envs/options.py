@@ -9,7 +9,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from gymnasium import spaces
-
 from rigid_gym.envs.pixels import DEFAULT_SIZE, PixelOptions
 
 RENDER_MODES = ("rgb_array", "human")

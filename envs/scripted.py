@@ -11,7 +11,6 @@ any state:
 from __future__ import annotations
 
 import numpy as np
-
 from rigid_gym.envs.base import RigidGymEnv
 from rigid_gym.envs.effector import PAD_HALF_EXTENTS, STEP_DISTANCE
 from rigid_gym.envs.task import CUBE_HALF, FRICTION, OBJECT_FEATURES, STEP_TIME

@@ -20,7 +20,6 @@ import numpy as np
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
-
 from rigid_gym.envs import TASKS
 from rigid_gym.envs.base import RigidGymEnv, task_spaces
 from rigid_gym.envs.core import ALL, TaskBatch

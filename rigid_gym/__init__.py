@@ -11,12 +11,12 @@
 import importlib.metadata
 
 from rigid_gym.config import SolverConfig
+from rigid_gym.envs import ENV_IDS  # registers rigid_gym/Push-v0 ... with Gymnasium
 from rigid_gym.inertia import MassProperties, mass_properties
 from rigid_gym.render import Camera, Renderer
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
 from rigid_gym.world import World
-from rigid_gym.envs import ENV_IDS  # registers rigid_gym/Push-v0 ... with Gymnasium
 
 __all__ = [
     "ENV_IDS", "Box", "Capsule", "Compound", "MassProperties", "Mesh", "Plane", "Pose", "Scene",

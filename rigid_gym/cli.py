@@ -120,6 +120,7 @@ def record(env_id: str, policy: str, algo: str | None, episodes: int, seed: int,
            run: str | None, contacts: bool) -> int:
     """Record ``episodes`` episodes of ``env_id`` driven by ``policy``; print each file."""
     import gymnasium as gym
+
     from rigid_gym.recording import RecordRerun
 
     env = RecordRerun(gym.make(env_id), out, episode_trigger=lambda k: True,
@@ -201,7 +202,8 @@ def train(args) -> int:
 
 def sweep(args) -> int:
     """Run (or resume) a sweep; print the results table; 1 if a trial failed."""
-    from rigid_gym.agents.sweep import parse_param, sweep as run_sweep
+    from rigid_gym.agents.sweep import parse_param
+    from rigid_gym.agents.sweep import sweep as run_sweep
 
     if args.resume is None and not (args.env_ids and args.seeds):
         raise ValueError("sweep: give ENV_ID... and --seeds, or --resume EXPERIMENT_DIR")

@@ -11,8 +11,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-from rigid_gym._core import TOUCHING_GAP
-
 SWEEP_MIN_BODIES = 64
 """Bounded bodies from which sort-and-sweep beats brute force (benchmarks/collision.py)."""
 

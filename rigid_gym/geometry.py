@@ -217,8 +217,8 @@ def compile_geometry(bodies, edge_segments: int) -> Geometry:
     offsets = np.cumsum([0] + [len(g.values) for g in grids])[:-1]
     vertex_offsets = np.cumsum([0] + [len(m.vertices) for m in grid_meshes])
     triangles = [m.triangles + o for m, o in zip(grid_meshes, vertex_offsets)]
-    f64 = lambda a, shape: np.ascontiguousarray(np.array(a, dtype=np.float64).reshape(shape))  # noqa: E731
-    i32 = lambda a: np.ascontiguousarray(np.array(a, dtype=np.int32))  # noqa: E731
+    f64 = lambda a, shape: np.ascontiguousarray(np.array(a, dtype=np.float64).reshape(shape))
+    i32 = lambda a: np.ascontiguousarray(np.array(a, dtype=np.int32))
     return Geometry(
         geom_body=i32(geom_body), geom_type=i32(geom_type), geom_size=f64(geom_size, (-1, 3)),
         geom_position=f64(geom_position, (-1, 3)), geom_rotation=f64(geom_rotation, (-1, 3, 3)),

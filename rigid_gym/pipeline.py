@@ -70,7 +70,7 @@ def step(world, config: SolverConfig, profile: Profile) -> None:
     # 0. broad phase: every pair whose boxes may meet within this step (velocities included);
     #    held bodies are put at their place first. When no world has a pair, the impulse
     #    phases have nothing to do
-    run = lambda name, bit: profile.run(name, advance, world, 1, bit)  # noqa: E731
+    run = lambda name, bit: profile.run(name, advance, world, 1, bit)
     if on["broad_phase"]:
         run("broad_phase", BROAD_PHASE)
     else:

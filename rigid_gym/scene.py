@@ -17,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from rigid_gym import quaternion as quat
-from rigid_gym.inertia import MassProperties, inverse_moments, mass_properties, principal_axes
 from rigid_gym._core import DYNAMIC, KINEMATIC, STATIC
 from rigid_gym.checks import vector
+from rigid_gym.inertia import MassProperties, inverse_moments, mass_properties, principal_axes
 from rigid_gym.shapes import SOLID_SHAPES, Plane, Pose
 
 MOTION_NAMES = {STATIC: "static", KINEMATIC: "kinematic", DYNAMIC: "dynamic"}

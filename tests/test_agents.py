@@ -8,10 +8,14 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
-
 from rigid_gym.agents.evaluate import evaluate, load_model
-from rigid_gym.agents.train import (DEMO_SEED, RESULT_KEYS, add_demonstrations, load_hyperparams,
-                                    train)
+from rigid_gym.agents.train import (
+    DEMO_SEED,
+    RESULT_KEYS,
+    add_demonstrations,
+    load_hyperparams,
+    train,
+)
 from rigid_gym.envs.scripted import scripted_policy
 
 COMMITTED = Path(__file__).resolve().parent.parent / "agents" / "models"
@@ -157,12 +161,11 @@ def test_the_table_names_the_method():
 
 
 def test_bc_sac_keeps_the_demonstrations_apart_and_clones_them():
+    from rigid_gym.agents.bc_sac import BCSAC
+    from rigid_gym.agents.train import algorithm_class
     from stable_baselines3 import HerReplayBuffer
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.logger import Logger
-
-    from rigid_gym.agents.bc_sac import BCSAC
-    from rigid_gym.agents.train import algorithm_class
 
     assert algorithm_class("bc_sac") is BCSAC
     env_id = "rigid_gym/Stack-v0"
@@ -280,10 +283,9 @@ def rollout_demonstrations(model, env_id: str, episodes: int, seed: int) -> None
 
 @pytest.mark.parametrize("n_envs", [1, 2])
 def test_demonstrations_from_the_dataset_are_the_transitions_a_rollout_gives(n_envs):
+    from rigid_gym.agents.bc_sac import BCSAC
     from stable_baselines3 import HerReplayBuffer
     from stable_baselines3.common.env_util import make_vec_env
-
-    from rigid_gym.agents.bc_sac import BCSAC
 
     env_id = "rigid_gym/Stack-v0"
 
@@ -307,10 +309,9 @@ def test_demonstrations_from_the_dataset_are_the_transitions_a_rollout_gives(n_e
 
 
 def test_demonstrations_from_a_named_dataset(tmp_path, monkeypatch):
+    from rigid_gym.agents.datasets import write_dataset
     from stable_baselines3 import SAC, HerReplayBuffer
     from stable_baselines3.common.env_util import make_vec_env
-
-    from rigid_gym.agents.datasets import write_dataset
 
     monkeypatch.setenv("MINARI_DATASETS_PATH", str(tmp_path))
     write_dataset("rigid_gym/throw/demo-test-v0", "rigid_gym/Throw-v0", "scripted", 3, seed=9)
@@ -367,7 +368,8 @@ def test_a_killed_run_resumes_and_its_result_has_the_whole_curve(tmp_path):
 
 
 def test_the_queue_plans_done_unfinished_and_new_runs(tmp_path, capsys):
-    from rigid_gym.agents.table import PACE, main as table, plan
+    from rigid_gym.agents.table import PACE, plan
+    from rigid_gym.agents.table import main as table
 
     runs, results = tmp_path / "runs", tmp_path / "results"
     (runs / "Push-sac-seed1" / "checkpoints" / "step_30000").mkdir(parents=True)
@@ -394,12 +396,11 @@ def test_the_queue_plans_done_unfinished_and_new_runs(tmp_path, capsys):
 
 def test_bc_sac_on_sbx_clones_the_demonstrations():
     pytest.importorskip("sbx")
-    from stable_baselines3 import HerReplayBuffer
-    from stable_baselines3.common.logger import Logger
-
     from rigid_gym.agents.algorithms import algorithm_class
     from rigid_gym.agents.bc_sac import BCSACJax
     from rigid_gym.agents.train import make_env
+    from stable_baselines3 import HerReplayBuffer
+    from stable_baselines3.common.logger import Logger
 
     assert algorithm_class("bc_sac", "sbx") is BCSACJax
     env_id = "rigid_gym/Stack-v0"

@@ -494,7 +494,7 @@ def test_capsule_across_the_ridges_of_a_mesh_keeps_its_deepest_three(resolution)
     saw = prism_mesh(polygon, -0.2, 0.2)
     saw = rg.Mesh(saw.vertices, saw.triangles, sdf_resolution=resolution)
     radius, slope = 0.05, -0.05
-    depth_at = lambda x: 0.004 + 0.05 * (x - 0.2)  # noqa: E731
+    depth_at = lambda x: 0.004 + 0.05 * (x - 0.2)
     centre = np.array([0.5, 0.24 + radius - depth_at(0.5), 0.0])
     q = quat.multiply(axis_angle((0, 0, 1), np.arctan(slope)), axis_angle((0, 1, 0), np.pi / 2))
     scene = rg.Scene()

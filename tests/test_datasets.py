@@ -8,9 +8,10 @@ import pytest
 minari = pytest.importorskip("minari", reason="the datasets need Minari: pip install "
                                               "'rigid_gym[datasets]'")
 
-from rigid_gym.agents import datasets  # noqa: E402
-from rigid_gym.cli import main  # noqa: E402
-from rigid_gym.envs.scripted import scripted_policy  # noqa: E402
+from rigid_gym.agents import datasets
+from rigid_gym.envs.scripted import scripted_policy
+
+from rigid_gym.cli import main
 
 
 @pytest.fixture(autouse=True)

@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 from gymnasium.error import ResetNeeded
 from gymnasium.utils.env_checker import check_env
+from rigid_gym._core import gather_observations
+from rigid_gym.envs.effector import PAD_HALF_EXTENTS, Workspace
+from rigid_gym.envs.scripted import scripted_policy
+from rigid_gym.envs.task import CUBE_HALF, CUBE_MASS, STEP_TIME
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import rigid_gym
-from rigid_gym._core import gather_observations
-from rigid_gym.envs.task import CUBE_HALF, CUBE_MASS, STEP_TIME
-from rigid_gym.envs.effector import PAD_HALF_EXTENTS, Workspace
-from rigid_gym.envs.scripted import scripted_policy
 
 TASK_IDS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
 

@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 
 import rigid_gym as rg
-from rigid_gym import _core
-from rigid_gym import analytic
+from rigid_gym import _core, analytic
 from rigid_gym import quaternion as quat
 from rigid_gym.report import scenes
 

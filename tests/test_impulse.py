@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
-
 from rigid_gym._core import add_point_mass_matrix, contact_impulse
+
 from rigid_gym import quaternion as quat
 
 N = np.array([0.0, 0.0, 1.0])

@@ -8,7 +8,6 @@ import sys
 import gymnasium as gym
 import numpy as np
 import pytest
-
 from rigid_gym.envs import ENV_IDS
 
 TASK_IDS = [i for i in ENV_IDS if "Dense" not in i]
@@ -128,10 +127,9 @@ def test_zoo_settings_are_hyperparams_yml_in_the_zoo_format():
 
 def test_the_zoo_callback_puts_the_demonstrations_in_the_buffer_first():
     pytest.importorskip("rl_zoo3")
+    from rigid_gym.agents.zoo import Demonstrations
     from stable_baselines3 import SAC, HerReplayBuffer
     from stable_baselines3.common.env_util import make_vec_env
-
-    from rigid_gym.agents.zoo import Demonstrations
 
     model = SAC("MultiInputPolicy", make_vec_env("rigid_gym/Throw-v0", n_envs=1),
                 buffer_size=1000, replay_buffer_class=HerReplayBuffer, learning_starts=100,

@@ -9,8 +9,9 @@ import sys
 import tomllib
 from pathlib import Path
 
-import rigid_gym
 import rigid_gym._core as core
+
+import rigid_gym
 
 
 def _stub_names(stub: Path) -> set[str]:

@@ -11,11 +11,11 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
+from pixel_digest import frame_digest
+from rigid_gym.envs.pixels import CAMERA_NAMES, CAMERAS, OBS_MODES, VIEWED
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import rigid_gym
-from pixel_digest import frame_digest
-from rigid_gym.envs.pixels import CAMERA_NAMES, CAMERAS, OBS_MODES, VIEWED
 from rigid_gym.render import Camera
 
 HERE = Path(__file__).parent

@@ -12,7 +12,7 @@ import time
 import pytest
 
 pytest.importorskip("ray.tune")  # the tune extra too, which the sweeps use
-import ray  # noqa: E402
+import ray
 
 
 def test_rllib_trains_ppo_on_a_task_by_its_id():

@@ -17,13 +17,13 @@ import pyarrow as pa
 import pytest
 import rerun as rr
 from rerun.chunk import RrdReader
+from rigid_gym._core import STATIC
+from rigid_gym.envs.scripted import scripted_policy
 
 import rigid_gym as rg
-from rigid_gym._core import STATIC
-from rigid_gym.cli import find_rerun
-from rigid_gym.envs.scripted import scripted_policy
-from rigid_gym.meshes import l_shape_mesh
 from rigid_gym import quaternion as quat
+from rigid_gym.cli import find_rerun
+from rigid_gym.meshes import l_shape_mesh
 from rigid_gym.recordable import Marker, Series
 from rigid_gym.recording import RecordRerun, WorldRecorder
 
@@ -529,10 +529,9 @@ def test_a_world_recorder_raises_the_error_of_its_file(tmp_path):
     with pytest.raises(OSError, match="File name too long"):
         recorder.close()
     # in a with block, the block's own exception goes first; the file's error is kept
-    with pytest.raises(KeyError, match="the block's"):
-        with WorldRecorder(world, path) as recorder:
-            recorder.record()
-            raise KeyError("the block's")
+    with pytest.raises(KeyError, match="the block's"), WorldRecorder(world, path) as recorder:
+        recorder.record()
+        raise KeyError("the block's")
     assert writer().failures.pop(str(path))[0] == errno.ENAMETOOLONG
 
 

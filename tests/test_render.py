@@ -6,7 +6,13 @@ import pytest
 import rigid_gym as rg
 from rigid_gym.meshes import bowl_mesh, l_shape_mesh
 from rigid_gym.render import (
-    AMBIENT, BACKGROUND, GROUND_COLOR, Camera, Renderer, corner_normals, tessellate,
+    AMBIENT,
+    BACKGROUND,
+    GROUND_COLOR,
+    Camera,
+    Renderer,
+    corner_normals,
+    tessellate,
 )
 
 IDENTITY = (1.0, 0.0, 0.0, 0.0)

@@ -3,13 +3,13 @@
 import gymnasium as gym
 import numpy as np
 import pytest
-
-import rigid_gym  # noqa: F401
 from rigid_gym.envs.push import Push, push_point
 from rigid_gym.envs.scripted import scripted_policy
 from rigid_gym.envs.stack import Stack
 from rigid_gym.envs.task import CUBE_HALF
 from rigid_gym.envs.throw import Throw
+
+import rigid_gym  # noqa: F401
 
 HALF1 = np.full((1, 1), CUBE_HALF)
 HALF2 = np.full((1, 2), CUBE_HALF)

@@ -6,10 +6,10 @@ import threading
 import gymnasium as gym
 import numpy as np
 import pytest
-
-import rigid_gym as rg
 from rigid_gym.envs import ENV_IDS
 from rigid_gym.envs.scripted import scripted_policy
+
+import rigid_gym as rg
 from rigid_gym.report.scenes import cube_stack, pile
 
 TASK_IDS = [i for i in ENV_IDS if "Dense" not in i]
@@ -213,9 +213,8 @@ def test_sb3_trains_on_the_batched_env(algorithm):
     """SAC + HER (compute_reward through env_method) and PPO learn from SB3VecEnv for a few
     hundred steps, with episodes ending (terminal_observation) along the way."""
     sb3 = pytest.importorskip("stable_baselines3")
-    from stable_baselines3.common.vec_env import VecMonitor
-
     from rigid_gym.agents.vec_env import SB3VecEnv
+    from stable_baselines3.common.vec_env import VecMonitor
 
     env_id = "rigid_gym/Push-v0" if algorithm == "sac_her" else "rigid_gym/PushDense-v0"
     envs = VecMonitor(SB3VecEnv(gym.make_vec(env_id, num_envs=4)))
