@@ -241,6 +241,13 @@ void apply_wrench(const BodyStates& bodies, const BodyModel& model, int i, doubl
 // motion gives over the patch, v_n(c + u t1 + v t2) = a + v Omega.t1 - u Omega.t2 (a face;
 // an edge along `edge`: a - s Omega.(n x edge)), by least squares; exact for a flat face over
 // a flat support, whose gaps are affine in the same way.
+// Contact i's target normal velocity t_i (normal_targets below).
+double point_target(const BodyModel& model, const ContactSet& set, int64_t i, double e, double dt) {
+    const double v = set.depth[i];
+    const double target = -e * v;
+    return closable(set.gap[i], model, dt) ? std::max(v, std::min(target, -set.gap[i] / dt)) : target;
+}
+
 struct Targets {
     double normal;
     double tip[2];
@@ -263,11 +270,7 @@ Targets normal_targets(const BodyModel& model, const ContactSet& set, int64_t se
         if (set.group[i] != seed) {
             continue;
         }
-        const double v_i = set.depth[i];
-        double target = -e * v_i;
-        if (closable(set.gap[i], model, dt)) {
-            target = std::max(v_i, std::min(target, -set.gap[i] / dt));
-        }
+        const double target = point_target(model, set, i, e, dt);
         const Vec3 q = sub(set.point[i], c);
         const double u = tips > 1 ? dot(q, t1) : dot(q, edge), v = tips > 1 ? dot(q, t2) : 0.0;
         mean += target;
@@ -298,11 +301,7 @@ Targets normal_targets(const BodyModel& model, const ContactSet& set, int64_t se
         const Vec3 q = sub(set.point[i], c);
         const double fitted = a + slope_u * (tips > 1 ? dot(q, t1) : dot(q, edge)) +
                               slope_v * (tips > 1 ? dot(q, t2) : 0.0);
-        double target = -e * set.depth[i];
-        if (closable(set.gap[i], model, dt)) {
-            target = std::max(set.depth[i], std::min(target, -set.gap[i] / dt));
-        }
-        if (fitted < target - REST_SPEED) {
+        if (fitted < point_target(model, set, i, e, dt) - REST_SPEED) {
             return out;
         }
     }

@@ -160,6 +160,14 @@ def test_the_table_names_the_method():
         "PPO, shaped reward"
 
 
+def demo_imitation_error(model) -> float:
+    """Mean squared error of the deterministic policy against the first 100 demo actions."""
+    demo = model.demo_buffer
+    obs = {key: value[:100, 0] for key, value in demo.observations.items()}
+    actions, _ = model.predict(obs, deterministic=True)
+    return float(np.mean((actions - demo.actions[:100, 0]) ** 2))
+
+
 def test_bc_sac_keeps_the_demonstrations_apart_and_clones_them():
     from rigid_gym.agents.bc_sac import BCSAC
     from rigid_gym.agents.train import algorithm_class
@@ -178,14 +186,9 @@ def test_bc_sac_keeps_the_demonstrations_apart_and_clones_them():
     assert (demo.actions[:100] == replay.actions[:100]).all()
     model.set_logger(Logger(None, []))
 
-    def error():
-        obs = {key: value[:100, 0] for key, value in demo.observations.items()}
-        actions, _ = model.predict(obs, deterministic=True)
-        return float(np.mean((actions - demo.actions[:100, 0]) ** 2))
-
-    before = error()
+    before = demo_imitation_error(model)
     model.train(gradient_steps=200, batch_size=32)
-    assert error() < 0.5 * before  # the BC term dominates: the actor imitates the demos
+    assert demo_imitation_error(model) < 0.5 * before  # the BC term dominates: the actor imitates the demos
     assert "train/bc_loss" in model.logger.name_to_value
     # the Q-filter keeps only samples the critic rates above the policy's action: recomputed
     # here from the same demo batch (the buffer samples with numpy's global generator)
@@ -413,14 +416,9 @@ def test_bc_sac_on_sbx_clones_the_demonstrations():
     assert demo.pos == model.replay_buffer.pos == 100
     model.set_logger(Logger(None, []))
 
-    def error():
-        obs = {key: value[:100, 0] for key, value in demo.observations.items()}
-        actions, _ = model.predict(obs, deterministic=True)
-        return float(np.mean((actions - demo.actions[:100, 0]) ** 2))
-
-    before = error()
+    before = demo_imitation_error(model)
     model.train(gradient_steps=200, batch_size=32)
-    assert error() < 0.5 * before
+    assert demo_imitation_error(model) < 0.5 * before
     assert model.logger.name_to_value["train/bc_kept"] == 1.0  # no Q-filter: every sample
     model.q_filter = True
     model.train(gradient_steps=5, batch_size=32)
