@@ -26,6 +26,9 @@ import rigid_gym  # noqa: F401  (registers the env ids)
 
 EVAL_SEED = 1_000_000
 """Evaluation episodes use seeds EVAL_SEED, EVAL_SEED + 1, ...; training uses small seeds."""
+VALIDATION_SEED = 3_000_000
+"""Episodes that choose among a run's checkpoints (``train.finish``) use seeds from here: apart
+from training's, the demonstrations' (2,000,000 on) and the evaluation's."""
 MODELS = Path(__file__).with_name("models")
 """The committed models: NAME.zip, with NAME.json (settings and ``evaluation``) beside each."""
 

@@ -19,8 +19,10 @@ without its version, e.g. ``runs/Push-sac-seed0/``):
                         episodes on fixed seeds, every ``eval_freq`` steps (the learning curve)
     result.json         the finished run's result (``RESULT_KEYS``), written last: the final
                         evaluation (deterministic, ``final_episodes`` episodes on seeds from
-                        EVAL_SEED, apart from training's) and the curve; a copy goes to
-                        ``results`` (agents/results/ for the table) when given
+                        EVAL_SEED, apart from training's) of the selected policy (``finish``)
+                        and the curve; a copy goes to ``results`` (agents/results/ for the
+                        table) when given
+    selected_model.zip  with checkpoints: the checkpoint's policy that the final evaluation ran
     checkpoints/        step_<steps>/ every ``checkpoint_freq`` steps and at the end (if set):
                         model.zip, run.json and evaluations.csv as they were then, and in the
                         newest one the replay buffer; ``train(resume=...)`` goes on from one
@@ -45,7 +47,7 @@ import gymnasium as gym
 import numpy as np
 import yaml
 from rigid_gym.agents.algorithms import algorithm_class, learner_for
-from rigid_gym.agents.evaluate import success_rate
+from rigid_gym.agents.evaluate import VALIDATION_SEED, load_model, success_rate
 from rigid_gym.agents.progress import note
 from rigid_gym.agents.vec_env import SB3VecEnv
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList
@@ -55,13 +57,18 @@ import rigid_gym  # noqa: F401  (registers the env ids)
 
 HYPERPARAMS = Path(__file__).with_name("hyperparams.yml")
 RESULT_KEYS = ("env_id", "algo", "seed", "env_steps", "wall_s", "cpu_s", "episodes", "success",
-               "curve", "learner", "method", "demo_env_steps", "machine")
+               "selected_env_steps", "curve", "learner", "method", "demo_env_steps", "machine")
 """A result file's keys: env_id, algo, seed; env_steps (training, without the
 demonstrations'), wall_s and cpu_s (the run's, evaluations included, over all its sittings);
 episodes and success (the final evaluation: deterministic policy, fraction of successes);
-curve [{"env_steps", "wall_s", "success"}] (the evaluations during training, then the final
-one); and for the table: learner, method (e.g. "SAC + HER + 500 demos"), demo_env_steps,
-machine (the processor, its cores)."""
+selected_env_steps (the env steps of the checkpoint whose policy the final evaluation ran,
+``finish``); curve [{"env_steps", "wall_s", "success"}] (the evaluations during training, then
+the final one); and for the table: learner, method (e.g. "SAC + HER + 500 demos"),
+demo_env_steps, machine (the processor, its cores)."""
+SELECT_FROM = 0.5
+"""``finish`` chooses among the checkpoints of the last (1 - SELECT_FROM) of the run."""
+VALIDATION_EPISODES = 20
+"""Episodes per checkpoint in ``finish``'s choice, on seeds from VALIDATION_SEED."""
 CURVE_POINTS = 20
 """Evaluations per run when ``eval_freq`` is not given."""
 DEMO_SEED = 2_000_000
@@ -231,14 +238,50 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     if checkpoints and checkpoints.written != model.num_timesteps:
         checkpoints.write()  # the end of training, with its times
     if final_episodes:
-        note(f"{env_id}: final evaluation, {final_episodes} episodes", progress)
-        final = success_rate(model, gym.make(env_id), final_episodes, progress=progress)
-        result = write_result(folder, model.num_timesteps, final, clock)
-        if results is not None:
-            Path(results).mkdir(parents=True, exist_ok=True)
-            target = Path(results) / f"{folder.name}.json"
-            target.write_text(json.dumps(result, indent=1) + "\n")
+        finish(folder, model, clock, final_episodes, results, progress)
     return folder
+
+
+def finish(folder: Path, model, clock: Clock, episodes: int = 100,
+           results: str | Path | None = None, progress: bool = False) -> dict:
+    """Choose the run's policy, evaluate it and write the result (``write_result``; a copy
+    into ``results`` when given); returns the result.
+
+    An off-policy learner's policy swings between evaluations (Throw SAC: 95% of 20 episodes
+    at 380k env steps, 55% at 400k), so the last one is a draw from that swing. With
+    checkpoints, each of the last (1 - SELECT_FROM) of the run plays VALIDATION_EPISODES
+    episodes on seeds from VALIDATION_SEED (apart from training's and the final
+    evaluation's), and the best of them (the latest among equals) is the run's policy, copied
+    to ``selected_model.zip`` (model selection on held-out seeds, as the RL Zoo keeps its
+    best_model.zip); without, the final ``model``. Then ``episodes`` episodes from EVAL_SEED.
+    The choice's evaluations count in the run's wall and CPU seconds (``clock``)."""
+    env_id = json.loads((folder / "run.json").read_text())["env_id"]
+    env = gym.make(env_id)
+    steps, chosen = model.num_timesteps, model
+    candidates = sorted((int(path.name.split("_")[1]), path)
+                        for path in folder.glob("checkpoints/step_*")
+                        if path.name.split("_")[1].isdigit() and (path / "model.zip").is_file()
+                        and int(path.name.split("_")[1]) >= SELECT_FROM * steps)
+    if candidates:
+        note(f"{env_id}: choosing among {len(candidates)} checkpoints, "
+             f"{VALIDATION_EPISODES} validation episodes each", progress)
+        best = -1.0
+        for step, path in candidates:
+            candidate = load_model(path / "model.zip", env)
+            rate = success_rate(candidate, env, VALIDATION_EPISODES, VALIDATION_SEED)
+            if rate["success_rate"] >= best:
+                best, steps, chosen = rate["success_rate"], step, candidate
+        shutil.copy2(folder / "checkpoints" / f"step_{steps}" / "model.zip",
+                     folder / "selected_model.zip")
+    note(f"{env_id}: final evaluation, {episodes} episodes (the policy of {steps:,} env steps)",
+         progress)
+    final = success_rate(chosen, env, episodes, progress=progress)
+    result = write_result(folder, model.num_timesteps, steps, final, clock)
+    if results is not None:
+        Path(results).mkdir(parents=True, exist_ok=True)
+        target = Path(results) / f"{folder.name}.json"
+        target.write_text(json.dumps(result, indent=1) + "\n")
+    return result
 
 
 def machine() -> str:
@@ -266,29 +309,34 @@ def curve_of(folder: Path) -> list[dict]:
                  "success": float(r["success_rate"])} for r in csv.DictReader(f)]
 
 
-def result_record(record: dict, curve: list[dict], episodes: int, seconds: dict) -> dict:
+def result_record(record: dict, curve: list[dict], episodes: int, seconds: dict,
+                  selected: int | None = None) -> dict:
     """A result (RESULT_KEYS) from a run.json ``record``, its ``curve`` (the last point the
-    final evaluation, of ``episodes`` episodes) and its ``seconds`` (``Clock.seconds``)."""
+    final evaluation, of ``episodes`` episodes), its ``seconds`` (``Clock.seconds``) and the
+    env steps of the policy evaluated (``selected``; default the run's end)."""
     from rigid_gym.agents.results import method
 
     demo = record.get("demonstrations") or {}
     return {"env_id": record["env_id"], "algo": record["algo"], "seed": record["seed"],
             "env_steps": curve[-1]["env_steps"], "wall_s": seconds["wall_seconds"],
             "cpu_s": seconds.get("cpu_seconds", 0.0), "episodes": episodes,
-            "success": curve[-1]["success"], "curve": curve,
+            "success": curve[-1]["success"],
+            "selected_env_steps": curve[-1]["env_steps"] if selected is None else selected,
+            "curve": curve,
             "learner": record.get("learner", "sb3"), "method": method(record),
             "demo_env_steps": demo.get("env_steps", 0), "machine": machine()}
 
 
-def write_result(folder: Path, env_steps: int, final: dict, clock: Clock) -> dict:
+def write_result(folder: Path, env_steps: int, selected: int, final: dict,
+                 clock: Clock) -> dict:
     """Write the finished run's ``result.json`` (RESULT_KEYS) from its run.json, its
-    evaluations.csv and the final evaluation ``final`` (``success_rate``'s dict), last on the
-    curve; returns it."""
+    evaluations.csv and the final evaluation ``final`` (``success_rate``'s dict) of the policy
+    of ``selected`` env steps, last on the curve at the run's ``env_steps``; returns it."""
     record = json.loads((folder / "run.json").read_text())
     seconds = clock.seconds()
     curve = curve_of(folder) + [{"env_steps": env_steps, "wall_s": seconds["wall_seconds"],
                                  "success": final["success_rate"]}]
-    result = result_record(record, curve, final["episodes"], seconds)
+    result = result_record(record, curve, final["episodes"], seconds, selected)
     (folder / "result.json").write_text(json.dumps(result, indent=1) + "\n")
     return result
 

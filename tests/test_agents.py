@@ -366,8 +366,44 @@ def test_a_killed_run_resumes_and_its_result_has_the_whole_curve(tmp_path):
     walls = [p["wall_s"] for p in result["curve"]]
     assert walls == sorted(walls) and result["wall_s"] > spent
     assert json.loads((folder / "run.json").read_text())["resumed_at"] == [200]
+    # the final evaluation ran a checkpoint of the run's second half, kept as selected_model
+    assert result["selected_env_steps"] in (200, 300, 400)
+    chosen = folder / "checkpoints" / f"step_{result['selected_env_steps']}" / "model.zip"
+    assert (folder / "selected_model.zip").read_bytes() == chosen.read_bytes()
+    assert evaluate(folder / "selected_model.zip", episodes=3)["success_rate"] == \
+        result["success"]
     assert table(["--tasks", "push", "--algos", "sac", "--seeds", "0,1", "--runs", str(runs),
                   "--results", str(results), "--dry-run"]) == 0
+
+
+@pytest.mark.parametrize("validation, chosen", [
+    ({200: 0.9, 300: 1.0, 400: 0.5}, 300),   # the best of the second half
+    ({100: 1.0, 200: 0.5, 300: 0.5, 400: 0.5}, 400),  # the first half is not a candidate
+    ({200: 1.0, 300: 1.0, 400: 0.5}, 300),   # the latest among equals
+])
+def test_finish_evaluates_the_checkpoint_of_best_validation_success(tmp_path, monkeypatch,
+                                                                    validation, chosen):
+    from rigid_gym.agents import train as training
+    from rigid_gym.agents.evaluate import EVAL_SEED, VALIDATION_SEED
+
+    folder = train("rigid_gym/Push-v0", timesteps=400, out=tmp_path, eval_freq=0,
+                   checkpoint_freq=100, final_episodes=0, n_envs=1,
+                   overrides={"learning_starts": 60, "batch_size": 32})
+    calls = []
+
+    def scripted(model, env, episodes, seed=EVAL_SEED, deterministic=True, progress=False):
+        calls.append((model.num_timesteps, episodes, seed))
+        rate = validation[model.num_timesteps] if seed == VALIDATION_SEED else \
+            model.num_timesteps / 1000  # the final evaluation says which policy it ran
+        return {"episodes": episodes, "success_rate": rate, "mean_return": 0.0}
+
+    monkeypatch.setattr(training, "success_rate", scripted)
+    model = load_model(folder / "model.zip", gym.make("rigid_gym/Push-v0"))
+    result = training.finish(folder, model, training.Clock(), episodes=7)
+    assert calls == [(step, training.VALIDATION_EPISODES, VALIDATION_SEED)
+                     for step in (200, 300, 400)] + [(chosen, 7, EVAL_SEED)]
+    assert (result["selected_env_steps"], result["success"], result["env_steps"]) == (
+        chosen, chosen / 1000, 400)
 
 
 def test_the_queue_plans_done_unfinished_and_new_runs(tmp_path, capsys):
