@@ -154,11 +154,11 @@ def code_version() -> dict:
     root = Path(rigid_gym.__file__).resolve().parent.parent
     commit = None
     with contextlib.suppress(OSError, subprocess.SubprocessError):
-        head = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True,
-                              text=True, timeout=10)
+        head = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], check=False,
+                              capture_output=True, text=True, timeout=10)
         if head.returncode == 0:
             status = subprocess.run(["git", "-C", str(root), "status", "--porcelain"],
-                                    capture_output=True, text=True, timeout=10)
+                                    check=False, capture_output=True, text=True, timeout=10)
             commit = head.stdout.strip() + ("-dirty" if status.stdout.strip() else "")
     return {"rigid_gym_version": rigid_gym.__version__, "git_commit": commit}
 

@@ -95,9 +95,9 @@ def table(results: list[dict]) -> str:
     lines = [TABLE_HEADER] + [table_row(runs) for runs in grouped(results).values()]
     machines = sorted({r.get("machine", "unknown machine") for r in results})
     episodes = sorted({r["episodes"] for r in results})
-    lines += ["", f"Final evaluation: deterministic policy, {', '.join(map(str, episodes))} "
-              f"episodes per seed on seeds apart from training's. Machine: "
-              f"{'; '.join(machines)}; one process of one thread per run."]
+    lines += ["", (f"Final evaluation: deterministic policy, {', '.join(map(str, episodes))} "
+                   f"episodes per seed on seeds apart from training's. Machine: "
+                   f"{'; '.join(machines)}; one process of one thread per run.")]
     return "\n".join(lines)
 
 

@@ -543,6 +543,11 @@ BUFFERS = ("replay_buffer", "demo_buffer")
 """The models' buffers a checkpoint keeps: SB3's replay buffer, bc_sac's demonstrations."""
 
 
+def _filled(array: np.ndarray, length: int, rows: int) -> np.ndarray:
+    """The first ``rows`` of ``array`` if it has a buffer's ``length`` rows, else all of it."""
+    return array[:rows] if array.shape[:1] == (length,) else array
+
+
 def save_buffers(model, folder: Path) -> None:
     """Write each of ``model``'s buffers (``BUFFERS``) that it has to ``folder/<name>.pkl``:
     the filled part of every array of the buffer's length (a 1e6-transition buffer holding
@@ -552,18 +557,14 @@ def save_buffers(model, folder: Path) -> None:
         if buffer is None:
             continue
         rows = buffer.buffer_size if buffer.full else buffer.pos
-
-        def filled(array: np.ndarray) -> np.ndarray:
-            return array[:rows] if array.shape[:1] == (buffer.buffer_size,) else array
-
         state = {"capacity": buffer.buffer_size * buffer.n_envs,
                  "buffer_size": buffer.buffer_size, "pos": buffer.pos, "full": buffer.full}
         for key, value in vars(buffer).items():
             if isinstance(value, np.ndarray):
-                state[key] = filled(value)
+                state[key] = _filled(value, buffer.buffer_size, rows)
             elif isinstance(value, dict) and value and all(
                     isinstance(v, np.ndarray) for v in value.values()):
-                state[key] = {k: filled(v) for k, v in value.items()}
+                state[key] = {k: _filled(v, buffer.buffer_size, rows) for k, v in value.items()}
         with open(folder / f"{name}.pkl", "wb") as f:
             pickle.dump(state, f, protocol=pickle.HIGHEST_PROTOCOL)
 

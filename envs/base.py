@@ -48,7 +48,10 @@ class RigidGymEnv(gym.Env):
         if cls.__doc__ and "{arguments}" in cls.__doc__:  # the shared table, written once
             cls.__doc__ = cls.__doc__.replace("{arguments}", ARGUMENTS_TABLE)
 
-    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": round(1 / STEP_TIME)}
+    # Gymnasium's Env declares metadata as a class-level dict (read, never mutated); a ClassVar
+    # here would contradict that declaration
+    metadata = {  # noqa: RUF012
+        "render_modes": ["rgb_array", "human"], "render_fps": round(1 / STEP_TIME)}
     task: Task
 
     def __init__(self, render_mode: str | None = None, reward_type: str = "sparse",

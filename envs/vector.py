@@ -37,7 +37,10 @@ class RigidGymVectorEnv(VectorEnv):
     may not name ``size``).
     """
 
-    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+    # Gymnasium's VectorEnv declares metadata as a class-level dict (read, never mutated); a
+    # ClassVar here would contradict that declaration
+    metadata = {  # noqa: RUF012
+        "autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
 
     def __init__(self, env_class: type[RigidGymEnv], num_envs: int, max_episode_steps: int,
                  **kwargs):

@@ -78,6 +78,7 @@ import os
 import re
 import time
 from pathlib import Path
+from typing import Self
 
 import gymnasium as gym
 import numpy as np
@@ -299,7 +300,7 @@ class WorldRecorder:
         be written."""
         self._close(errors=True)
 
-    def __enter__(self) -> WorldRecorder:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, exc_type, exc, traceback) -> None:

@@ -390,7 +390,7 @@ def _tessellate_compound(shape: Compound, plane_half_size: float) -> tuple[np.nd
 
 def _tiled_square(half: float) -> tuple[np.ndarray, np.ndarray]:
     """The square |x|, |y| <= ``half`` (m) at z = 0 as a grid of about PLANE_TILE tiles."""
-    tiles = max(int(round(2.0 * half / PLANE_TILE)), 1)
+    tiles = max(round(2.0 * half / PLANE_TILE), 1)
     ticks = np.linspace(-half, half, tiles + 1)
     x, y = np.meshgrid(ticks, ticks, indexing="ij")
     vertices = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])

@@ -277,8 +277,8 @@ def rollout_demonstrations(model, env_id: str, episodes: int, seed: int) -> None
         next_obs, rewards, dones, infos = env.step(actions)
         stored = {key: value.copy() for key, value in next_obs.items()}
         for i in np.flatnonzero(dones):
-            for key in stored:
-                stored[key][i] = infos[i]["terminal_observation"][key]
+            for key, value in stored.items():
+                value[i] = infos[i]["terminal_observation"][key]
         for buffer in buffers:
             buffer.add(obs, stored, model.policy.scale_action(actions), rewards, dones, infos)
         obs, finished = next_obs, finished + int(dones.sum())

@@ -120,7 +120,8 @@ def test_replay_runs_the_viewer_installed_with_this_python(tmp_path, monkeypatch
     viewer = cli.find_rerun()
     assert os.path.dirname(viewer) in (sysconfig.get_path("scripts"),
                                        os.path.dirname(sys.executable))
-    version = subprocess.run([viewer, "--version"], capture_output=True, text=True).stdout
+    version = subprocess.run([viewer, "--version"], check=True, capture_output=True,
+                             text=True).stdout
     assert f"rerun-cli {rerun.__version__}" in version
     # a stand-in viewer that writes down its arguments
     fake, log = tmp_path / "rerun", tmp_path / "args.txt"
@@ -182,7 +183,7 @@ def test_every_committed_model_is_evaluated_with_the_settings_beside_it(name, en
 
     model = Path(__file__).resolve().parent.parent / "agents" / "models" / f"{name}.zip"
     assert main(["evaluate", str(model), "--episodes", "1"]) == 0
-    out, err = capsys.readouterr()
+    out, _err = capsys.readouterr()
     assert f"{env_id}: success rate" in out
 
 

@@ -133,7 +133,7 @@ def test_terminate_on_success_ends_the_episode():
     policy = scripted_policy(env)
     obs, _ = env.reset(seed=0)
     for step in range(50):
-        obs, reward, terminated, truncated, info = env.step(policy(obs))
+        obs, reward, terminated, _truncated, info = env.step(policy(obs))
         if terminated:
             break
     assert terminated and info["is_success"] and reward == 0.0 and step < 49

@@ -143,9 +143,9 @@ def test_near_box_occludes_far_box_whatever_the_body_order():
     assert images[0].tobytes() == images[1].tobytes()
     (centre,), _ = camera.project([(0.5, -0.5, 0.4)], 64, 64)
     i, j = int(centre[1]), int(centre[0])
-    r, g, b = images[0][i, j].astype(int)
+    r, _, b = images[0][i, j].astype(int)
     assert r > 2 * b
-    r, g, b = images[0][i, j + 8].astype(int)
+    r, _, b = images[0][i, j + 8].astype(int)
     assert b > 2 * r
 
 

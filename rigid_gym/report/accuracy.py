@@ -10,6 +10,7 @@ Carlo mass-property estimators against the exact integrals.
 
 from __future__ import annotations
 
+import functools
 import statistics
 import time
 from dataclasses import dataclass
@@ -186,14 +187,15 @@ def sweep_mass_properties(resolutions, samples, repeats: int) -> list[SampledCur
         exact = mass_properties(shape, DENSITY)
         mass_properties_grid(shape, DENSITY, 4)  # warm-up outside the timings
         for method, counts, estimate, seeds in (
-                ("grid", resolutions, lambda n, s: mass_properties_grid(shape, DENSITY, n), [0]),
+                ("grid", resolutions,
+                 lambda n, s, shape=shape: mass_properties_grid(shape, DENSITY, n), [0]),
                 ("Monte Carlo", samples,
-                 lambda n, s: mass_properties_monte_carlo(shape, DENSITY, n, s),
+                 functools.partial(mass_properties_monte_carlo, shape, DENSITY),
                  MONTE_CARLO_SEEDS)):
             points, errors, seconds = [], [], []
             for n in counts:
                 errors.append(inertia_errors([estimate(n, s) for s in seeds], exact)[1])
-                seconds.append(median_seconds(lambda: estimate(n, 0), repeats))
+                seconds.append(median_seconds(functools.partial(estimate, n, 0), repeats))
                 points.append(n ** 3 if method == "grid" else n)
             curves.append(SampledCurve(name, method, np.array(points, dtype=np.float64),
                                        np.array(errors), np.array(seconds)))

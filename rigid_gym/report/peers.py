@@ -263,8 +263,9 @@ def mjcf(scene: rg.Scene, dt: float, integrator: str = "Euler") -> str:
                    f'solref="{_numbers(solref(body.restitution, dt))}"')
         inside = [f"<geom {geom} {contact}/>"]
         if body.motion == DYNAMIC:
-            inside = ["<freejoint/>", f'<inertial pos="0 0 0" mass="{body.mass:.17g}" '
-                      f'diaginertia="{_numbers(body.principal_moments)}"/>', *inside]
+            inertial = (f'<inertial pos="0 0 0" mass="{body.mass:.17g}" '
+                        f'diaginertia="{_numbers(body.principal_moments)}"/>')
+            inside = ["<freejoint/>", inertial, *inside]
             # a free joint's qvel is (linear, world frame; angular, body frame)
             local_w = quat.to_matrix(np.asarray(body.orientation)).T @ body.angular_velocity
             qvel += [*body.velocity, *local_w]
