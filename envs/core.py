@@ -33,6 +33,7 @@ from rigid_gym.envs.task import (
     SOLVER_STEPS,
     STEP_TIME,
     Task,
+    sparse_reward,
 )
 
 from rigid_gym.scene import Scene
@@ -241,7 +242,7 @@ class TaskBatch:
         desired64 = self.desired64[copies]
         successes = self.task.goal_reached(achieved64, desired64)
         if self.options.reward_type == "sparse":
-            rewards = successes - 1.0  # the sparse reward, from the test just made
+            rewards = sparse_reward(successes)  # from the test just made
         elif self.options.reward_type == "shaped":
             held = gripper.held[copies] if self.task.has_grip \
                 else np.full(len(worlds), -1, dtype=np.int64)

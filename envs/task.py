@@ -97,8 +97,7 @@ class Task:
         ``goal_reached``), ``"dense"`` minus the Euclidean distance between the goals (m)."""
         if reward_type == "dense":
             return -distance(achieved_goal - desired_goal)
-        return self.goal_reached(achieved_goal, desired_goal) - 1.0
-
+        return sparse_reward(self.goal_reached(achieved_goal, desired_goal))
 
     def shaped_reward(self, pad: np.ndarray, held: np.ndarray, achieved_goal: np.ndarray,
                       desired_goal: np.ndarray, half: np.ndarray) -> np.ndarray:
@@ -111,6 +110,12 @@ class Task:
 
 SHAPED_SCALE = 5.0
 """1/m: a shaped stage's closeness is 1 - tanh(SHAPED_SCALE * distance) (ManiSkill's)."""
+
+
+def sparse_reward(reached: np.ndarray) -> np.ndarray:
+    """The sparse reward of goal tests ``reached`` (...) bool -> (...) float64: 0 where the goal
+    is reached, else -1 (panda-gym's and Fetch's)."""
+    return reached - 1.0
 
 
 def closeness(offset: np.ndarray, scale: float = SHAPED_SCALE) -> np.ndarray:
