@@ -52,6 +52,7 @@ from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.vec_env import VecCheckNan, VecMonitor
 
 import rigid_gym  # noqa: F401  (registers the env ids)
+from rigid_gym.checks import integer
 
 HYPERPARAMS = Path(__file__).with_name("hyperparams.yml")
 RESULT_KEYS = ("env_id", "algo", "seed", "env_steps", "wall_s", "cpu_s", "episodes", "success",
@@ -315,9 +316,7 @@ def _write_seconds(folder: Path, clock: Clock) -> None:
 
 
 def _count(value, name: str, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ValueError(f"train: {name} must be an int >= {low}, got {value!r}")
-    return int(value)
+    return integer(value, f"train: {name}", low)
 
 
 def add_demonstrations(model, env_id: str, episodes: int, seed: int,

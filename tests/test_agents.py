@@ -90,7 +90,7 @@ def test_bad_arguments_are_refused(tmp_path):
         train("rigid_gym/Nope-v0", out=tmp_path)
     with pytest.raises(ValueError, match="algo must be one of"):
         train("rigid_gym/Push-v0", algo="dqn", out=tmp_path)
-    with pytest.raises(ValueError, match="timesteps must be an int >= 1"):
+    with pytest.raises(ValueError, match="train: timesteps: must be an int >= 1"):
         train("rigid_gym/Push-v0", timesteps=0, out=tmp_path)
     with pytest.raises(ValueError, match="ppo has none"):
         train("rigid_gym/PushDense-v0", demonstrations=1, out=tmp_path)

@@ -159,7 +159,7 @@ def test_the_recipes_write_every_shipped_dataset(capsys):
     (["dataset", "rigid_gym/Push-v0"], "give ENV_ID and --dataset-id, or --verify ID"),
     (["dataset", "--verify", "rigid_gym/push/none-v0"], "no dataset rigid_gym/push/none-v0"),
     (["dataset", "rigid_gym/Push-v0", "--dataset-id", "a/b-v0", "--noise", "-1"],
-     "must be in [0.0, 10.0], got -1"),
+     "must be in [0, 10], got -1"),
     (["dataset", "Nope-v0", "--dataset-id", "a/b-v0"], "unknown env id 'Nope-v0'"),
 ])
 def test_bad_dataset_arguments_fail_clearly(args, message, capsys):

@@ -328,7 +328,7 @@ def test_stepping_before_reset_is_refused():
     ({"colour": "red"}, "unexpected keyword"),
     ({"reward_type": "staged"}, "reward_type must be"),
     ({"render_mode": "ansi"}, "render_mode must be"),
-    ({"observation_noise": -0.1}, "observation_noise must be"),
+    ({"observation_noise": -0.1}, "observation_noise: must be finite and >= 0, got -0.1"),
     ({"randomize": {"gravity": (0, 1)}}, "unknown key"),
     ({"randomize": {"mass": (2.0, 1.0)}}, "low <= high"),
     ({"randomize": {"restitution": (0.0, 1.5)}}, "<= 1.0"),

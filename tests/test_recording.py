@@ -674,7 +674,7 @@ def test_subproc_vec_env_workers_write_complete_files(tmp_path):
     ({"run": ""}, "RecordRerun.run: must be a non-empty name"),
     ({"episode_trigger": 3}, "RecordRerun.episode_trigger: expected a function"),
     ({"contacts": "yes"}, "RecordRerun.contacts: must be a bool"),
-    ({"force_scale": -1.0}, "RecordRerun.force_scale: must be a finite number of m per N > 0"),
+    ({"force_scale": -1.0}, "RecordRerun.force_scale: must be finite and > 0 m per N, got -1.0"),
     ({"chunk_steps": 0}, "RecordRerun.chunk_steps: must be an int >= 1, got 0"),
 ])
 def test_bad_wrapper_arguments_are_refused(kwargs, message, tmp_path):

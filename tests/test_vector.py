@@ -114,7 +114,7 @@ def test_a_non_finite_copy_is_named():
 
 
 def test_vector_env_refuses_what_it_cannot_do():
-    with pytest.raises(ValueError, match="num_envs must be an int >= 1"):
+    with pytest.raises(ValueError, match="num_envs: must be an int >= 1, got 0"):
         gym.make_vec("rigid_gym/Push-v0", num_envs=0, vectorization_mode="vector_entry_point")
     with pytest.raises(ValueError, match="cannot include 'size'"):
         gym.make_vec("rigid_gym/Push-v0", num_envs=2, vectorization_mode="vector_entry_point",

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 import rigid_gym as rg
+from rigid_gym.checks import integer
 from rigid_gym.inertia import mass_properties, mass_properties_grid, mass_properties_monte_carlo
 from rigid_gym.meshes import l_shape_mesh
 from rigid_gym.report.cases import Case
@@ -66,8 +67,7 @@ class Curve:
 
 def median_seconds(call, repeats: int) -> float:
     """Median wall time (s, time.perf_counter) of ``repeats`` calls of ``call()``."""
-    if repeats < 1:
-        raise ValueError(f"median_seconds: repeats must be >= 1, got {repeats!r}")
+    integer(repeats, "median_seconds: repeats", 1)
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
