@@ -170,6 +170,10 @@ def _jax_class():
         demonstrations and runs every gradient step in one jitted ``fori_loop``, as SBX's SAC
         does (``policy_delay`` 1: the actor steps with the critic)."""
 
+        # set by sbx.SAC's setup: the entropy coefficient's optimiser state and the PRNG key
+        ent_coef_state: Any
+        key: Any
+
         def train(self, gradient_steps: int, batch_size: int) -> None:
             use_bc = self.bc_weight > 0 and self.demo_buffer is not None \
                 and self.demo_buffer.size() > 0

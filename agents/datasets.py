@@ -45,6 +45,7 @@ from minari import MinariDataset
 from minari.data_collector import EpisodeBuffer
 
 import rigid_gym
+from rigid_gym.checks import in_range, integer
 
 DATA_FORMAT = "arrow"
 """Minari's storage format for these datasets (pyarrow; its default, hdf5, needs h5py)."""
@@ -104,8 +105,7 @@ def play(env: gym.Env, act: Callable[[dict], np.ndarray], seeds: list[int | None
     before). noise: standard deviation of Gaussian noise (drawn from ``rng``) added to each
     action, which is then clipped to the action space; the stored action is the one stepped,
     in the action space's dtype. on_episode: called with each finished episode."""
-    if not 0.0 <= noise <= 10.0:
-        raise ValueError(f"dataset: noise must be in [0, 10] (action units), got {noise!r}")
+    in_range(noise, 0.0, 10.0, "dataset: noise", unit="(action units)")
     space = env.action_space
     assert isinstance(space, gym.spaces.Box)  # every task acts in a box
     rng = rng if rng is not None else np.random.default_rng(0)
@@ -154,11 +154,11 @@ def code_version() -> dict:
     root = Path(rigid_gym.__file__).resolve().parent.parent
     commit = None
     with contextlib.suppress(OSError, subprocess.SubprocessError):
-        head = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], capture_output=True,
-                              text=True, timeout=10)
+        head = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"], check=False,
+                              capture_output=True, text=True, timeout=10)
         if head.returncode == 0:
             status = subprocess.run(["git", "-C", str(root), "status", "--porcelain"],
-                                    capture_output=True, text=True, timeout=10)
+                                    check=False, capture_output=True, text=True, timeout=10)
             commit = head.stdout.strip() + ("-dirty" if status.stdout.strip() else "")
     return {"rigid_gym_version": rigid_gym.__version__, "git_commit": commit}
 
@@ -194,10 +194,9 @@ def write_dataset(dataset_id: str, env_id: str, policy: str, episodes: int, nois
     if env_id not in rigid_gym.ENV_IDS:
         raise ValueError(f"dataset: unknown env id {env_id!r}; choose from "
                          f"{', '.join(rigid_gym.ENV_IDS)}")
-    if not (isinstance(episodes, int) and episodes >= 1):
-        raise ValueError(f"dataset: episodes must be an int >= 1, got {episodes!r}")
-    if not (isinstance(seed, int) and 0 <= seed and seed + episodes <= 2 ** 32):
-        raise ValueError(f"dataset: seed + episodes must be in [0, 2^32], got seed {seed!r}")
+    integer(episodes, "dataset: episodes", 1, 2 ** 32)
+    integer(seed, f"dataset: seed (with {episodes} episodes, seeded seed + k)", 0,
+            2 ** 32 - episodes)
     if minari.list_local_datasets(prefix=dataset_id).get(dataset_id) is not None:
         raise ValueError(f"dataset: {dataset_id} already exists in {datasets_root()}; "
                          f"delete it first (minari delete {dataset_id}) or pick a new id")

@@ -95,11 +95,11 @@ def table(results: list[dict]) -> str:
     lines = [TABLE_HEADER] + [table_row(runs) for runs in grouped(results).values()]
     machines = sorted({r.get("machine", "unknown machine") for r in results})
     episodes = sorted({r["episodes"] for r in results})
-    lines += ["", f"Final evaluation: deterministic policy, {', '.join(map(str, episodes))} "
-              f"episodes per seed on seeds apart from training's, of each run's selected "
-              f"checkpoint (the best on held-out validation seeds of its second half, "
-              f"`train.finish`). Machine: {'; '.join(machines)}; one process of one thread "
-              f"per run."]
+    lines += ["", (f"Final evaluation: deterministic policy, {', '.join(map(str, episodes))} "
+                   f"episodes per seed on seeds apart from training's, of each run's selected "
+                   f"checkpoint (the best on held-out validation seeds of its second half, "
+                   f"`train.finish`). Machine: {'; '.join(machines)}; one process of one "
+                   f"thread per run.")]
     return "\n".join(lines)
 
 

@@ -190,8 +190,8 @@ def write_results(results, folder: Path) -> list[str]:
         plot_task(env_id, {(env_id, runs[0]["method"]): runs},
                   folder / (re.sub(r"[^A-Za-z0-9=._-]+", "_", plot) + ".png"))
     if failed:
-        lines += ["", f"Failed trials ({len(failed)}; `rigid-gym sweep --resume {folder}` "
-                  "goes on from their newest checkpoints):", ""]
+        lines += ["", (f"Failed trials ({len(failed)}; `rigid-gym sweep --resume {folder}` "
+                       "goes on from their newest checkpoints):"), ""]
         lines += [f"- {line}" for line in failed]
     (folder / "results.md").write_text("\n".join(lines) + "\n")
     return failed

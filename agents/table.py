@@ -21,7 +21,6 @@ import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import TextIO
 
 RECIPES = {
     "push": [("rigid_gym/Push-v0", "sac"), ("rigid_gym/Push-v0", "ppo")],
@@ -109,27 +108,28 @@ def launch(entries: list[dict], jobs: int, runs: Path, results: Path,
     """Run the entries not done, at most ``jobs`` processes at once; returns the number that
     failed (their logs say why)."""
     todo = [e for e in entries if e["state"] != "done"]
-    running: list[tuple[subprocess.Popen, dict, TextIO]] = []
+    running: list[tuple[subprocess.Popen, dict]] = []
     failed = 0
     runs.mkdir(parents=True, exist_ok=True)
     env = {**os.environ, **ONE_THREAD}
     while todo or running:
         while todo and len(running) < jobs:
             e = todo.pop(0)
-            log: TextIO = open(runs / f"{e['name']}.log", "a")
+            log = runs / f"{e['name']}.log"
             command = [sys.executable, "-m", "rigid_gym.agents.table", "--one", e["env_id"],
                        e["algo"], str(e["seed"]), "--runs", str(runs), "--results",
                        str(results), "--checkpoint-freq", str(checkpoint_freq)]
-            process = subprocess.Popen(command, stdout=log, stderr=subprocess.STDOUT, env=env)
+            # the child writes to its own copy of the log's descriptor, so ours can close now
+            with open(log, "a") as out:
+                process = subprocess.Popen(command, stdout=out, stderr=subprocess.STDOUT, env=env)
             print(f"{time.strftime('%H:%M:%S')} started {e['name']} ({e['state']}), log "
-                  f"{log.name}", flush=True)
-            running.append((process, e, log))
+                  f"{log}", flush=True)
+            running.append((process, e))
         time.sleep(2.0)
         for item in list(running):
-            process, e, log = item
+            process, e = item
             if process.poll() is not None:
                 running.remove(item)
-                log.close()
                 ok = process.returncode == 0
                 failed += not ok
                 print(f"{time.strftime('%H:%M:%S')} {e['name']} "

@@ -54,6 +54,7 @@ from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.vec_env import VecCheckNan, VecMonitor
 
 import rigid_gym  # noqa: F401  (registers the env ids)
+from rigid_gym.checks import integer
 
 HYPERPARAMS = Path(__file__).with_name("hyperparams.yml")
 RESULT_KEYS = ("env_id", "algo", "seed", "env_steps", "wall_s", "cpu_s", "episodes", "success",
@@ -363,9 +364,7 @@ def _write_seconds(folder: Path, clock: Clock) -> None:
 
 
 def _count(value, name: str, low: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise ValueError(f"train: {name} must be an int >= {low}, got {value!r}")
-    return int(value)
+    return integer(value, f"train: {name}", low)
 
 
 def add_demonstrations(model, env_id: str, episodes: int, seed: int,
@@ -591,6 +590,11 @@ BUFFERS = ("replay_buffer", "demo_buffer")
 """The models' buffers a checkpoint keeps: SB3's replay buffer, bc_sac's demonstrations."""
 
 
+def _filled(array: np.ndarray, length: int, rows: int) -> np.ndarray:
+    """The first ``rows`` of ``array`` if it has a buffer's ``length`` rows, else all of it."""
+    return array[:rows] if array.shape[:1] == (length,) else array
+
+
 def save_buffers(model, folder: Path) -> None:
     """Write each of ``model``'s buffers (``BUFFERS``) that it has to ``folder/<name>.pkl``:
     the filled part of every array of the buffer's length (a 1e6-transition buffer holding
@@ -600,18 +604,14 @@ def save_buffers(model, folder: Path) -> None:
         if buffer is None:
             continue
         rows = buffer.buffer_size if buffer.full else buffer.pos
-
-        def filled(array: np.ndarray) -> np.ndarray:
-            return array[:rows] if array.shape[:1] == (buffer.buffer_size,) else array
-
         state = {"capacity": buffer.buffer_size * buffer.n_envs,
                  "buffer_size": buffer.buffer_size, "pos": buffer.pos, "full": buffer.full}
         for key, value in vars(buffer).items():
             if isinstance(value, np.ndarray):
-                state[key] = filled(value)
+                state[key] = _filled(value, buffer.buffer_size, rows)
             elif isinstance(value, dict) and value and all(
                     isinstance(v, np.ndarray) for v in value.values()):
-                state[key] = {k: filled(v) for k, v in value.items()}
+                state[key] = {k: _filled(v, buffer.buffer_size, rows) for k, v in value.items()}
         with open(folder / f"{name}.pkl", "wb") as f:
             pickle.dump(state, f, protocol=pickle.HIGHEST_PROTOCOL)
 

@@ -19,6 +19,8 @@ errors partly cancel (sphere, capsule).
     python benchmarks/mass_properties.py
 """
 
+import functools
+
 from rigid_gym.inertia import mass_properties, mass_properties_grid, mass_properties_monte_carlo
 from rigid_gym.meshes import box_mesh, l_shape_mesh
 from rigid_gym.report.accuracy import inertia_errors as errors
@@ -65,7 +67,7 @@ def main():
         by_method = {}
         for method, points, seeds, estimate in estimators():
             mass_err, inertia_err = errors([estimate(shape, seed) for seed in seeds], exact)
-            seconds = median_seconds(lambda: estimate(shape, 0), REPEATS)
+            seconds = median_seconds(functools.partial(estimate, shape, 0), REPEATS)
             rows.append(f"| {name} | {method} | {points:,} | {mass_err:.2e} | {inertia_err:.2e} "
                         f"| {1e3 * seconds:.1f} |")
             by_method.setdefault(method, []).append((points, mass_err, inertia_err))

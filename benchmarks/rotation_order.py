@@ -29,7 +29,7 @@ DTS = (1 / 25, 1 / 50, 1 / 100, 1 / 200, 1 / 400)
 
 def run(order: int, dt: float) -> tuple[float, float, float]:
     world = rg.World(spinning_body(MOMENTS, OMEGA0), dt=dt, config=rg.SolverConfig(rotation_order=order))
-    steps = int(round(DURATION / dt))
+    steps = round(DURATION / dt)
     exact = analytic.torque_free_angular_velocity(MOMENTS, OMEGA0, dt * np.arange(1, steps + 1))
     e0 = world.kinetic_energy()
     energy_error = omega_error = 0.0

@@ -24,7 +24,7 @@ from gymnasium.error import ResetNeeded
 from rigid_gym.envs.core import ALL, TaskBatch
 from rigid_gym.envs.options import ARGUMENTS_TABLE, Options, checked_actions
 from rigid_gym.envs.pixels import DEFAULT_SIZE, PixelOptions
-from rigid_gym.envs.task import OBJECT_FEATURES, STEP_TIME, Task
+from rigid_gym.envs.task import STEP_TIME, Task
 
 from rigid_gym.recordable import Series
 
@@ -47,8 +47,15 @@ class RigidGymEnv(gym.Env):
         super().__init_subclass__(**kwargs)
         if cls.__doc__ and "{arguments}" in cls.__doc__:  # the shared table, written once
             cls.__doc__ = cls.__doc__.replace("{arguments}", ARGUMENTS_TABLE)
+        if cls.__doc__ and "{observation" in cls.__doc__:  # written from the task's layout
+            layout = cls.task.observation_layout
+            cls.__doc__ = cls.__doc__.replace("{observation_size}", str(layout.size)).replace(
+                "{observation_fields}", layout.table().replace("\n", "\n    "))
 
-    metadata = {"render_modes": ["rgb_array", "human"], "render_fps": round(1 / STEP_TIME)}
+    # Gymnasium's Env declares metadata as a class-level dict (read, never mutated); a ClassVar
+    # here would contradict that declaration
+    metadata = {  # noqa: RUF012
+        "render_modes": ["rgb_array", "human"], "render_fps": round(1 / STEP_TIME)}
     task: Task
 
     def __init__(self, render_mode: str | None = None, reward_type: str = "sparse",
@@ -199,7 +206,7 @@ class RigidGymEnv(gym.Env):
 def task_spaces(task: Task, pixels: PixelOptions) -> tuple[spaces.Dict, spaces.Box]:
     """The observation and action spaces of one copy of ``task`` observed as ``pixels``
     says (its obs_mode and frame size)."""
-    size = 6 + int(task.has_grip) + OBJECT_FEATURES * task.num_cubes
+    size = task.observation_layout.size
     vector = lambda n: spaces.Box(-np.inf, np.inf, shape=(n,), dtype=np.float32)
     keys: dict[str, spaces.Space] = {"achieved_goal": vector(task.goal_size),
                                      "desired_goal": vector(task.goal_size)}

@@ -22,6 +22,7 @@ import numpy as np
 from gymnasium.error import ResetNeeded
 from rigid_gym._core import gather_observations
 from rigid_gym.envs.effector import SuctionGripper, Workspace
+from rigid_gym.envs.observation import PAD, gather_index
 from rigid_gym.envs.options import Options
 from rigid_gym.envs.pixels import CopyFrames
 from rigid_gym.envs.task import (
@@ -29,11 +30,10 @@ from rigid_gym.envs.task import (
     CUBE_MASS,
     FRICTION,
     GRIPPER_START,
-    OBJECT_FEATURES,
-    ROTATION_FEATURES,
     SOLVER_STEPS,
     STEP_TIME,
     Task,
+    sparse_reward,
 )
 
 from rigid_gym.scene import Scene
@@ -91,10 +91,15 @@ class TaskBatch:
         self.fixtures: list[int] = []
         self.table = self.gripper_body = -1
         self.frames: CopyFrames | None = None  # the copies' pixels, when observed
-        # how observe reads the World's state (made with the World: observation_index), and
-        # where the achieved goal (the cubes' positions) lies in an observation
+        # how observe reads the World's state (made with the World from the task's layout:
+        # gather_index), and where the achieved goal (the cubes' positions) and the holding
+        # flag lie in an observation
+        layout = task.observation_layout
         empty = np.zeros(0, dtype=np.int64)
-        self.gather, self.minus, self.achieved_columns = empty, empty, empty
+        self.gather, self.minus = empty, empty
+        self.achieved_columns = layout.entries([f"cube{k}.position"
+                                                for k in range(task.num_cubes)])
+        self.holding = layout.slice("holding") if task.has_grip else None
         self.all_worlds = np.arange(b, dtype=np.int64)
 
     # -- the World --------------------------------------------------------------------------
@@ -121,10 +126,9 @@ class TaskBatch:
                            num_worlds=self.num_worlds if self.batched else None)
         self.gripper = SuctionGripper(self.world, self.gripper_body, self.cubes,
                                       [(h, h, h) for h in half.tolist()], STEP_TIME, Workspace())
-        first_cube, self.gather, self.minus = observation_index(
-            len(scene.bodies), self.gripper_body, self.cubes, self.task.has_grip)
-        self.achieved_columns = np.array([first_cube + OBJECT_FEATURES * j + i
-                                          for j in range(len(self.cubes)) for i in range(3)])
+        bodies = {PAD: self.gripper_body} | {f"cube{k}": c for k, c in enumerate(self.cubes)}
+        self.gather, self.minus = gather_index(self.task.observation_layout, len(scene.bodies),
+                                               bodies)
         if self.options.pixels.pixels:
             self.frames = CopyFrames(scene, self.task, half, self.options.pixels,
                                      self.num_worlds)
@@ -210,11 +214,10 @@ class TaskBatch:
     def observe(self, copies) -> Outcome:
         """The Outcome of ``copies`` (ALL, or an int array) in their current state.
 
-        observation: the pad's position (3, m) and velocity (3, m/s), whether it holds a cube
-        (1, tasks with a grip), then per cube its position (3), position minus the pad's (3),
-        orientation (ROTATION_FEATURES), velocity (3) and angular velocity (3); achieved_goal:
-        the cubes' positions. Computed in float64, checked finite, noise added, then cast to
-        float32; the goal test and the reward read the float32 goals, exactly as
+        observation: the fields of the task's ``observation_layout`` (the pad's state, whether
+        it holds a cube, each cube's state); achieved_goal: the cubes' positions (their
+        ``cube<k>.position`` fields). Computed in float64, checked finite, noise added, then
+        cast to float32; the goal test and the reward read the float32 goals, exactly as
         ``compute_reward`` sees them. With pixels (``obs_mode``), ``pixels`` holds the
         copies' frames (k, height, width, 3) uint8, and "pixels" mode leaves out
         ``observation``."""
@@ -224,8 +227,8 @@ class TaskBatch:
         vectors = np.empty((len(worlds), len(self.gather)))
         finite = gather_observations(s.position, s.velocity, s.rotation, s.angular_velocity,
                                      worlds, self.gather, self.minus, vectors)
-        if self.task.has_grip:
-            vectors[:, 6] = gripper.held[copies] >= 0
+        if self.holding is not None:
+            vectors[:, self.holding] = (gripper.held[copies] >= 0)[:, None]
         if not finite:  # a solver failure: say so here, not in a network
             self.refuse_non_finite(vectors, worlds)
         achieved = vectors[:, self.achieved_columns].astype(np.float32)
@@ -239,7 +242,7 @@ class TaskBatch:
         desired64 = self.desired64[copies]
         successes = self.task.goal_reached(achieved64, desired64)
         if self.options.reward_type == "sparse":
-            rewards = successes - 1.0  # the sparse reward, from the test just made
+            rewards = sparse_reward(successes)  # from the test just made
         elif self.options.reward_type == "shaped":
             held = gripper.held[copies] if self.task.has_grip \
                 else np.full(len(worlds), -1, dtype=np.int64)
@@ -284,27 +287,3 @@ class TaskBatch:
         """The goal markers of ``copy``'s episode (``Task.markers``)."""
         return self.task.markers(self.goals[copy], self.half[copy])
 
-
-def observation_index(bodies: int, pad: int, cubes: list[int],
-                      grip: bool) -> tuple[int, np.ndarray, np.ndarray]:
-    """Where ``TaskBatch.observe`` finds each observation entry in a copy's state laid side by
-    side (``gather_observations``): positions (bodies x 3), velocities (bodies x 3), rotations
-    (bodies x 9, row-major), angular velocities (bodies x 3). Returns the first cube's entry,
-    the (size,) index and the (size,) entries subtracted (-1: none): the pad's position and
-    velocity, the held flag's place (filled in afterwards), then per cube its position, its
-    position minus the pad's, the first two columns of its rotation (ROTATION_FEATURES), its
-    velocity and angular velocity."""
-    n = bodies
-    position = lambda b: [3 * b + i for i in range(3)]
-    velocity = lambda b: [3 * n + 3 * b + i for i in range(3)]
-    columns = lambda b: [6 * n + 9 * b + 3 * row + column
-                         for column in range(ROTATION_FEATURES // 3) for row in range(3)]
-    spin = lambda b: [15 * n + 3 * b + i for i in range(3)]
-    index = position(pad) + velocity(pad) + ([0] if grip else [])
-    first = len(index)
-    minus = [-1] * first
-    for c in cubes:
-        block = position(c) + position(c) + columns(c) + velocity(c) + spin(c)
-        index += block
-        minus += [-1] * 3 + position(pad) + [-1] * (len(block) - 6)
-    return first, np.array(index, dtype=np.int64), np.array(minus, dtype=np.int64)

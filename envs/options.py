@@ -11,6 +11,8 @@ import numpy as np
 from gymnasium import spaces
 from rigid_gym.envs.pixels import DEFAULT_SIZE, PixelOptions
 
+from rigid_gym.checks import in_range
+
 RENDER_MODES = ("rgb_array", "human")
 REWARD_TYPES = ("sparse", "dense", "shaped")
 """sparse -1 / 0 and dense -distance (Fetch's and panda-gym's, goals only: HER recomputes
@@ -72,10 +74,7 @@ class Options:
         if not isinstance(terminate_on_success, bool):
             raise ValueError(f"{where}: terminate_on_success must be a bool, "
                              f"got {terminate_on_success!r}")
-        noise = float(observation_noise)
-        if not np.isfinite(noise) or noise < 0.0:
-            raise ValueError(f"{where}: observation_noise must be a finite standard "
-                             f"deviation >= 0, got {observation_noise!r}")
+        noise = in_range(observation_noise, 0.0, np.inf, f"{where}: observation_noise")
         return cls(render_mode, reward_type, terminate_on_success,
                    randomization_ranges(randomize, where), noise,
                    PixelOptions.checked(where, obs_mode, width, height, camera, goal_marker))

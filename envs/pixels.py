@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from rigid_gym.checks import integer
 from rigid_gym.render import Camera, Renderer
 
 OBS_MODES = ("state", "pixels", "state+pixels")
@@ -95,10 +96,7 @@ class PixelOptions:
                              f"got {obs_mode!r}")
         low, high = SIZE_RANGE
         for name, value in (("width", width), ("height", height)):
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
-                    or not low <= value <= high:
-                raise ValueError(f"{where}: {name} must be an int in [{low}, {high}] pixels, "
-                                 f"got {value!r}")
+            integer(value, f"{where}: {name}", low, high, unit="pixels")
         if not isinstance(camera, Camera) and (not isinstance(camera, str)
                                                or camera not in CAMERA_NAMES):
             raise ValueError(f"{where}: camera must be one of {list(CAMERA_NAMES)} or a "

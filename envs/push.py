@@ -90,9 +90,11 @@ class PushEnv(RigidGymEnv):
 
     | key | size | content |
     |---|---|---|
-    | observation | 24 | pad position (3, m), pad velocity (3, m/s); cube position (3), cube minus pad position (3), cube orientation (6: the first two columns of its rotation matrix), cube velocity (3, m/s), cube angular velocity (3, rad/s) |
+    | observation | {observation_size} | the fields below (``task.observation_layout``) |
     | achieved_goal | 3 | cube position, m |
     | desired_goal | 3 | target position, m (z = the cube's half edge: on the table) |
+
+    {observation_fields}
 
     ``observation_noise`` adds N(0, sigma^2) to every entry of ``observation`` (not to goals).
 

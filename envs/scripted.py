@@ -2,7 +2,7 @@
 the benchmarks and ``rigid-gym record --policy scripted``.
 
 Each policy is a function of the observation dict alone (no memory), so it can resume from
-any state:
+any state; it reads the observation's fields by name (the task's ``observation_layout``):
 
     policy = scripted_policy(env)          # env: any rigid_gym env, wrapped or not
     action = policy(observation)
@@ -10,10 +10,13 @@ any state:
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from rigid_gym.envs.base import RigidGymEnv
 from rigid_gym.envs.effector import PAD_HALF_EXTENTS, STEP_DISTANCE
-from rigid_gym.envs.task import CUBE_HALF, FRICTION, OBJECT_FEATURES, STEP_TIME
+from rigid_gym.envs.observation import Layout
+from rigid_gym.envs.task import CUBE_HALF, FRICTION, STEP_TIME
 
 PAD_HALF_HEIGHT = PAD_HALF_EXTENTS[2]
 CRUISE_HEIGHT = 0.12
@@ -28,7 +31,8 @@ def scripted_policy(env):
     task = env.unwrapped
     if not isinstance(task, RigidGymEnv):
         raise ValueError(f"scripted_policy: expected a rigid_gym env, got {type(task).__name__}")
-    return {"PushEnv": _push, "StackEnv": _stack, "ThrowEnv": _throw}[type(task).__name__]
+    policy = {"PushEnv": _push, "StackEnv": _stack, "ThrowEnv": _throw}[type(task).__name__]
+    return functools.partial(policy, task.task.observation_layout)
 
 
 def _toward(pad: np.ndarray, target: np.ndarray) -> np.ndarray:
@@ -36,9 +40,14 @@ def _toward(pad: np.ndarray, target: np.ndarray) -> np.ndarray:
     return np.clip((target - pad) / STEP_DISTANCE, -1.0, 1.0)
 
 
-def _cube(observation: np.ndarray, k: int, has_grip: bool) -> np.ndarray:
-    start = 6 + int(has_grip) + OBJECT_FEATURES * k
-    return observation[start:start + 3].astype(np.float64)
+def _field(layout: Layout, observation: dict, name: str) -> np.ndarray:
+    """Field ``name`` of ``observation["observation"]``, as float64."""
+    return observation["observation"][layout.slice(name)].astype(np.float64)
+
+
+def _held(layout: Layout, observation: dict) -> bool:
+    """Whether the observation's ``holding`` flag says the pad holds a cube."""
+    return bool(observation["observation"][layout.slice("holding")][0] > 0.5)
 
 
 def _above(pad, point, height) -> np.ndarray:
@@ -49,11 +58,10 @@ def _above(pad, point, height) -> np.ndarray:
     return _toward(pad, target)
 
 
-def _push(observation: dict) -> np.ndarray:
+def _push(layout: Layout, observation: dict) -> np.ndarray:
     """Get behind the cube on the line from the target through it, then push along that line."""
-    obs = observation["observation"]
-    pad = obs[:3].astype(np.float64)
-    cube = _cube(obs, 0, False)
+    pad = _field(layout, observation, "pad.position")
+    cube = _field(layout, observation, "cube0.position")
     goal = observation["desired_goal"].astype(np.float64)
     line = goal[:2] - cube[:2]
     distance = np.linalg.norm(line)
@@ -93,12 +101,11 @@ def _carry(pad, cube, target, held) -> np.ndarray:
     return np.append(np.zeros(3), -1.0)
 
 
-def _stack(observation: dict) -> np.ndarray:
+def _stack(layout: Layout, observation: dict) -> np.ndarray:
     """Carry cube 0 to the tower's base, then cube 1 onto it; then let go and rise."""
-    obs = observation["observation"]
-    pad, held = obs[:3].astype(np.float64), obs[6] > 0.5
+    pad, held = _field(layout, observation, "pad.position"), _held(layout, observation)
     goal = observation["desired_goal"].astype(np.float64)
-    cubes = [_cube(obs, 0, True), _cube(obs, 1, True)]
+    cubes = [_field(layout, observation, f"cube{k}.position") for k in (0, 1)]
     for k in (0, 1):
         target = goal[3 * k:3 * k + 3]
         if np.linalg.norm(cubes[k] - target) > 0.01:
@@ -109,11 +116,10 @@ def _stack(observation: dict) -> np.ndarray:
     return np.array([0.0, 0.0, 1.0, -1.0])
 
 
-def _throw(observation: dict) -> np.ndarray:
+def _throw(layout: Layout, observation: dict) -> np.ndarray:
     """Pick the cube up, carry it to the launch point, release it on a ballistic arc to the bin."""
-    obs = observation["observation"]
-    pad, held = obs[:3].astype(np.float64), obs[6] > 0.5
-    cube = _cube(obs, 0, True)
+    pad, held = _field(layout, observation, "pad.position"), _held(layout, observation)
+    cube = _field(layout, observation, "cube0.position")
     goal = observation["desired_goal"].astype(np.float64)
     if not held:
         if cube[2] > 0.03 or np.linalg.norm(cube[:2]) > 0.3:  # in flight or thrown:

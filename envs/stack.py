@@ -98,9 +98,11 @@ class StackEnv(RigidGymEnv):
 
     | key | size | content |
     |---|---|---|
-    | observation | 43 | pad position (3, m), pad velocity (3, m/s), holding (1: 1 while a cube is held); then per cube (0, 1): position (3), position minus the pad's (3), orientation (6: first two columns of the rotation matrix), velocity (3), angular velocity (3) |
+    | observation | {observation_size} | the fields below (``task.observation_layout``) |
     | achieved_goal | 6 | cube 0 position, cube 1 position, m |
     | desired_goal | 6 | the targets: cube 0 on the table at the tower's x, y; cube 1 one edge above it |
+
+    {observation_fields}
 
     ## Rewards
     The goal is reached when each cube is within 0.05 m of its target **and** the cubes are

@@ -12,7 +12,10 @@ Conventions (those of panda-gym and Gymnasium-Robotics Fetch, so their HER setti
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
+from rigid_gym.envs.observation import Layout, observation_layout
 
 from rigid_gym.recordable import Marker
 from rigid_gym.scene import Scene
@@ -31,12 +34,6 @@ FRICTION = 0.5
 """Coulomb coefficient of table, cubes and gripper (a pair uses sqrt(mu_a mu_b))."""
 GRIPPER_START = (0.0, 0.0, 0.12)
 """m: the gripper's centre at reset."""
-ROTATION_FEATURES = 6
-"""An orientation is observed as the first two columns of its rotation matrix (continuous,
-unlike a quaternion's sign or Euler angles)."""
-OBJECT_FEATURES = 3 + 3 + ROTATION_FEATURES + 3 + 3
-"""Observed per cube: position, position minus the pad's, orientation, velocity, angular
-velocity."""
 MARKER_ALPHA = 0.45
 """Opacity of goal markers in rendered frames and recordings."""
 GOAL_COLOR = (0.2, 0.8, 0.3)
@@ -56,6 +53,12 @@ class Task:
     """(eye (m), target (m), vertical field of view (deg)) of the rgb_array camera: the
     workspace from the front right, above."""
     num_fixtures: int = 0
+
+    @functools.cached_property
+    def observation_layout(self) -> Layout:
+        """The fields of this task's ``observation`` vector, in order
+        (``rigid_gym.envs.observation``)."""
+        return observation_layout(self.num_cubes, self.has_grip)
 
     def place_cubes(self, rngs: list, half: np.ndarray) -> np.ndarray:
         """Start positions (k, cubes, 3) m of the cubes with half edges ``half`` (k, cubes) m,
@@ -94,8 +97,7 @@ class Task:
         ``goal_reached``), ``"dense"`` minus the Euclidean distance between the goals (m)."""
         if reward_type == "dense":
             return -distance(achieved_goal - desired_goal)
-        return self.goal_reached(achieved_goal, desired_goal) - 1.0
-
+        return sparse_reward(self.goal_reached(achieved_goal, desired_goal))
 
     def shaped_reward(self, pad: np.ndarray, held: np.ndarray, achieved_goal: np.ndarray,
                       desired_goal: np.ndarray, half: np.ndarray) -> np.ndarray:
@@ -108,6 +110,12 @@ class Task:
 
 SHAPED_SCALE = 5.0
 """1/m: a shaped stage's closeness is 1 - tanh(SHAPED_SCALE * distance) (ManiSkill's)."""
+
+
+def sparse_reward(reached: np.ndarray) -> np.ndarray:
+    """The sparse reward of goal tests ``reached`` (...) bool -> (...) float64: 0 where the goal
+    is reached, else -1 (panda-gym's and Fetch's)."""
+    return reached - 1.0
 
 
 def closeness(offset: np.ndarray, scale: float = SHAPED_SCALE) -> np.ndarray:

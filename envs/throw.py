@@ -119,9 +119,11 @@ class ThrowEnv(RigidGymEnv):
     ## Observation space
     | key | size | content |
     |---|---|---|
-    | observation | 25 | pad position (3, m), pad velocity (3, m/s), holding (1); cube position (3), cube minus pad position (3), cube orientation (6), cube velocity (3, m/s), cube angular velocity (3, rad/s) |
+    | observation | {observation_size} | the fields below (``task.observation_layout``) |
     | achieved_goal | 3 | cube position, m |
     | desired_goal | 3 | the bin's centre at the height of a cube resting in it, m |
+
+    {observation_fields}
 
     ## Rewards
     The goal is reached when the cube is in the bin: its centre within 0.08 m (the bin's

@@ -29,6 +29,8 @@ from rigid_gym.envs.stack import StackEnv
 from rigid_gym.envs.task import CUBE_HALF
 from rigid_gym.envs.throw import ThrowEnv
 
+from rigid_gym.checks import integer
+
 
 class RigidGymVectorEnv(VectorEnv):
     """``num_envs`` copies of ``env_class``'s task (a RigidGymEnv class) in one batched World.
@@ -37,18 +39,16 @@ class RigidGymVectorEnv(VectorEnv):
     may not name ``size``).
     """
 
-    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+    # Gymnasium's VectorEnv declares metadata as a class-level dict (read, never mutated); a
+    # ClassVar here would contradict that declaration
+    metadata = {  # noqa: RUF012
+        "autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
 
     def __init__(self, env_class: type[RigidGymEnv], num_envs: int, max_episode_steps: int,
                  **kwargs):
         name = f"{env_class.__name__} vector env"
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) \
-                or num_envs < 1:
-            raise ValueError(f"{name}: num_envs must be an int >= 1, got {num_envs!r}")
-        if isinstance(max_episode_steps, bool) or not isinstance(max_episode_steps, (int, np.integer)) \
-                or max_episode_steps < 1:
-            raise ValueError(f"{name}: max_episode_steps must be an int >= 1, "
-                             f"got {max_episode_steps!r}")
+        integer(num_envs, f"{name}: num_envs", 1)
+        integer(max_episode_steps, f"{name}: max_episode_steps", 1)
         if kwargs.get("render_mode") is not None:
             raise ValueError(f"{name}: render_mode must be None (render a single env, or record "
                              "one with rigid_gym.recording)")

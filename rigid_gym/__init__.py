@@ -19,7 +19,7 @@ from rigid_gym.shapes import Box, Capsule, Compound, Mesh, Plane, Pose, Sphere
 from rigid_gym.world import World
 
 __all__ = [
-    "ENV_IDS", "Box", "Capsule", "Compound", "MassProperties", "Mesh", "Plane", "Pose", "Scene",
-    "SolverConfig", "Sphere", "World", "mass_properties",
+    "ENV_IDS", "Box", "Camera", "Capsule", "Compound", "MassProperties", "Mesh", "Plane", "Pose",
+    "Renderer", "Scene", "SolverConfig", "Sphere", "World", "mass_properties",
 ]
 __version__ = importlib.metadata.version("rigid_gym")  # pyproject.toml's

@@ -46,6 +46,8 @@ from pathlib import Path
 
 import numpy as np
 
+from rigid_gym.checks import allowed
+
 
 def timed_steps(world, steps: int) -> float:
     """Step ``world`` ``steps`` times; return steps/s, the first step (which sizes the pair
@@ -325,7 +327,7 @@ def bounded(kind, low, high):
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected {kind.__name__}, got {text!r}") from None
         if not low <= value <= high:
-            raise argparse.ArgumentTypeError(f"must be in [{low}, {high}], got {text}")
+            raise argparse.ArgumentTypeError(f"must be {allowed(low, high)}, got {text}")
         return value
 
     return parse

@@ -13,7 +13,7 @@ import numpy as np
 
 # the solver's touching tolerance, m (src/patch.h CLOSED_GAP): contacts() reports contacts
 # this close as touching
-from rigid_gym._core import TOUCHING_GAP as TOUCHING_GAP
+from rigid_gym._core import TOUCHING_GAP as TOUCHING_GAP  # noqa: PLC0414 - explicit re-export
 
 SWEEP_MIN_BODIES = 64
 """Bounded bodies from which sort-and-sweep beats brute force (benchmarks/collision.py)."""

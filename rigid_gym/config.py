@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from rigid_gym._core import DYNAMIC
+from rigid_gym.checks import in_range, integer
 
 if TYPE_CHECKING:
     from rigid_gym.scene import Scene
@@ -69,16 +70,12 @@ class SolverConfig:
     def __post_init__(self):
         for name, low, high in (("collision_passes", 0, 1000), ("contact_passes", 0, 1000),
                                 ("shock_sweeps", 0, 1000), ("box_edge_segments", 1, 64)):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) \
-                    or not low <= value <= high:
-                raise ValueError(f"SolverConfig.{name} must be an int in [{low}, {high}], "
-                                 f"got {value!r}")
+            integer(getattr(self, name), f"SolverConfig.{name}", low, high)
         if isinstance(self.overlap_correction, bool) or not isinstance(
-                self.overlap_correction, (int, float, np.floating)) \
-                or not 0.0 <= self.overlap_correction <= 1.0:
-            raise ValueError("SolverConfig.overlap_correction must be a number in [0, 1], got "
+                self.overlap_correction, (int, float, np.floating)):
+            raise ValueError("SolverConfig.overlap_correction: expected a number, got "
                              f"{self.overlap_correction!r}")
+        in_range(self.overlap_correction, 0.0, 1.0, "SolverConfig.overlap_correction")
         if self.rotation_order not in ROTATION_ORDERS:
             raise ValueError(f"SolverConfig.rotation_order must be one of {ROTATION_ORDERS}, "
                              f"got {self.rotation_order!r}")

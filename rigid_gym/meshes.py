@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigid_gym.checks import positive
+from rigid_gym.checks import integer, positive
 from rigid_gym.shapes import Box, Mesh
 
 
@@ -107,8 +107,8 @@ def bowl_mesh(outer_radius: float = 0.5, inner_radius: float = 0.4, segments: in
         raise ValueError(
             f"bowl_mesh.inner_radius: must be < outer_radius = {big}, got {small}"
         )
-    if int(segments) < 3 or int(rings) < 1:
-        raise ValueError(f"bowl_mesh: need segments >= 3 and rings >= 1, got {segments}, {rings}")
+    integer(segments, "bowl_mesh.segments", 3)
+    integer(rings, "bowl_mesh.rings", 1)
     up = np.linspace(-0.5 * np.pi, 0.0, int(rings) + 1)  # outer surface, pole to rim
     down = up[::-1]  # inner surface, rim to pole
     profile = np.concatenate([

@@ -78,12 +78,14 @@ import os
 import re
 import time
 from pathlib import Path
+from typing import Self
 
 import gymnasium as gym
 import numpy as np
 from rerun.chunk import RrdReader
 
 from rigid_gym._core import STATIC
+from rigid_gym.checks import in_range, integer
 from rigid_gym.recordable import Marker, Recordable
 from rigid_gym.recording_writer import Writer, blueprint_path, row_columns, writer
 from rigid_gym.shapes import Plane, Pose
@@ -266,13 +268,10 @@ class WorldRecorder:
         if not isinstance(world, World):
             raise ValueError(f"WorldRecorder.world: expected a rigid_gym.World, got "
                              f"{type(world).__name__}")
-        if (isinstance(world_index, bool) or not isinstance(world_index, (int, np.integer))
-                or not 0 <= world_index < world.num_worlds):
-            raise ValueError(f"WorldRecorder.world_index: must be an int in "
-                             f"[0, {world.num_worlds - 1}], got {world_index!r}")
+        self.world_index = integer(world_index, "WorldRecorder.world_index", 0,
+                                   world.num_worlds - 1)
         self.world = world
         self.path = Path(path)
-        self.world_index = int(world_index)
         self.application_id = str(application_id)
         self.options = _Options(contacts, force_scale, chunk_steps, "WorldRecorder")
         self._recording: _Recording | None = None
@@ -299,7 +298,7 @@ class WorldRecorder:
         be written."""
         self._close(errors=True)
 
-    def __enter__(self) -> WorldRecorder:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, exc_type, exc, traceback) -> None:
@@ -321,19 +320,10 @@ class _Options:
     def __init__(self, contacts, force_scale, chunk_steps, where: str):
         if not isinstance(contacts, bool):
             raise ValueError(f"{where}.contacts: must be a bool, got {contacts!r}")
-        try:
-            scale = float(force_scale)
-        except (TypeError, ValueError):
-            scale = np.nan
-        if not np.isfinite(scale) or scale <= 0.0:
-            raise ValueError(f"{where}.force_scale: must be a finite number of m per N > 0, "
-                             f"got {force_scale!r}")
-        if (isinstance(chunk_steps, bool) or not isinstance(chunk_steps, (int, np.integer))
-                or chunk_steps < 1):
-            raise ValueError(f"{where}.chunk_steps: must be an int >= 1, got {chunk_steps!r}")
         self.contacts = contacts
-        self.force_scale = scale
-        self.chunk_steps = int(chunk_steps)
+        self.force_scale = in_range(force_scale, 0.0, np.inf, f"{where}.force_scale",
+                                    open_low=True, unit="m per N")
+        self.chunk_steps = integer(chunk_steps, f"{where}.chunk_steps", 1)
 
 
 def _open(path: Path, recording_id: str, world, index: int, options: _Options, layout,

@@ -49,6 +49,7 @@ client stops it or dies.
 from __future__ import annotations
 
 import atexit
+import functools
 import os
 import pickle
 import signal
@@ -256,7 +257,7 @@ def main() -> None:
                 path = args[0]
                 try:
                     _handle(files, layouts, kind, args)
-                except Exception as error:  # this file's; the others go on
+                except Exception as error:  # noqa: BLE001 - any failure is this file's; others go on
                     if kind != "close":
                         files[path] = None
                     failures.append(_failure(path, error))
@@ -265,7 +266,7 @@ def main() -> None:
             if file is not None:
                 try:
                     file.close()
-                except Exception as error:
+                except Exception as error:  # noqa: BLE001 - reported like any other failure
                     failures.append(_failure(path, error))
         for failure in failures:  # no sync is left to answer them
             _report(_failure_error(*failure))
@@ -379,7 +380,7 @@ class _File:
                            start_time=time.time_ns(), name=recording_id)), *layout.scene]
         for body, pose in statics.items():
             self.chunks.append(layout.static(layout.entities[body], pose,
-                                             lambda: [_transform(*pose)]))
+                                             lambda pose=pose: [_transform(*pose)]))
         if contacts:
             self.chunks += [
                 layout.static("world/contacts/points", None, lambda: [rr.Points3D.from_fields(
@@ -395,7 +396,7 @@ class _File:
             entity = f"world/goals/{k}"
             self.chunks += [_static_chunk(entity, _transform(position, orientation)),
                             self.layout.static(entity, pickle.dumps((shape, rgba)),
-                                               lambda: _geometry(shape, Pose(), rgba))]
+                                               functools.partial(_geometry, shape, Pose(), rgba))]
 
     def rows(self, data: bytes, width: int) -> None:
         """Rows (T, width) of float64 as bytes: step, sim_time (s), every body's position

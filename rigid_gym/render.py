@@ -24,7 +24,7 @@ from numpy.typing import ArrayLike
 from rigid_gym import _core
 from rigid_gym import quaternion as quat
 from rigid_gym._core import DYNAMIC, KINEMATIC
-from rigid_gym.checks import finite_array, number, positive, vector
+from rigid_gym.checks import finite_array, in_range, integer, number, positive, vector
 from rigid_gym.meshes import box_mesh, lathe
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import SOLID_SHAPES, Box, Capsule, Compound, Mesh, Plane, Sphere
@@ -218,9 +218,7 @@ class Renderer:
             raise ValueError(f"{where}: shape must be Sphere, Box, Capsule, Mesh or Compound, "
                              f"got {type(shape).__name__}")
         rgb = _color(color, f"{where}: color")
-        alpha = number(alpha, f"{where}: alpha")
-        if not 0.0 < alpha <= 1.0:
-            raise ValueError(f"{where}: alpha must be in (0, 1], got {alpha!r}")
+        alpha = in_range(alpha, 0.0, 1.0, f"{where}: alpha", open_low=True)
         vertices, triangles = tessellate(shape)
         corners, normals = vertices[triangles].reshape(-1, 3), corner_normals(vertices, triangles)
         kind = _OPAQUE if alpha == 1.0 else _TRANSLUCENT
@@ -390,7 +388,7 @@ def _tessellate_compound(shape: Compound, plane_half_size: float) -> tuple[np.nd
 
 def _tiled_square(half: float) -> tuple[np.ndarray, np.ndarray]:
     """The square |x|, |y| <= ``half`` (m) at z = 0 as a grid of about PLANE_TILE tiles."""
-    tiles = max(int(round(2.0 * half / PLANE_TILE)), 1)
+    tiles = max(round(2.0 * half / PLANE_TILE), 1)
     ticks = np.linspace(-half, half, tiles + 1)
     x, y = np.meshgrid(ticks, ticks, indexing="ij")
     vertices = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])
@@ -453,26 +451,16 @@ def _camera(value) -> Camera:
 
 def _size(value, where: str) -> int:
     """An image side in pixels: an int in [16, 4096]."""
-    if not _is_int(value) or not 16 <= value <= 4096:
-        raise ValueError(f"{where}: must be an int in [16, 4096] pixels, got {value!r}")
-    return int(value)
-
-
-def _is_int(value) -> bool:
-    return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+    return integer(value, where, 16, 4096, unit="pixels")
 
 
 def _index(value, count: int, where: str, what: str) -> int:
-    """An index into ``count`` ``what`` (bodies, markers): an int in [0, count)."""
-    if not _is_int(value) or not 0 <= value < count:
-        raise ValueError(f"{where}: must be an int in [0, {count}) (there are {count} {what}), "
-                         f"got {value!r}")
-    return int(value)
+    """An index into ``count`` ``what`` (bodies, markers): an int in [0, count - 1]."""
+    if count == 0:
+        raise ValueError(f"{where}: there are no {what} to index, got {value!r}")
+    return integer(value, f"{where} (one of {count} {what})", 0, count - 1)
 
 
 def _color(value, where: str) -> np.ndarray:
     """(3,) RGB with every channel in [0, 1]."""
-    rgb = vector(value, 3, where)
-    if np.any((rgb < 0.0) | (rgb > 1.0)):
-        raise ValueError(f"{where}: RGB channels must be in [0, 1], got {rgb.tolist()}")
-    return rgb
+    return in_range(vector(value, 3, where), 0.0, 1.0, f"{where} (RGB channels)")

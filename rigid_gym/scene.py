@@ -18,7 +18,7 @@ import numpy as np
 
 from rigid_gym import quaternion as quat
 from rigid_gym._core import DYNAMIC, KINEMATIC, STATIC
-from rigid_gym.checks import vector
+from rigid_gym.checks import in_range, vector
 from rigid_gym.inertia import MassProperties, inverse_moments, mass_properties, principal_axes
 from rigid_gym.shapes import SOLID_SHAPES, Plane, Pose
 
@@ -138,8 +138,8 @@ class Scene:
             position=body_x, orientation=body_q,
             velocity=vector(velocity, 3, f"{where}: velocity"),
             angular_velocity=vector(angular_velocity, 3, f"{where}: angular_velocity"),
-            friction=_in_range(friction, 0.0, np.inf, f"{where}: friction"),
-            restitution=_in_range(restitution, 0.0, 1.0, f"{where}: restitution"),
+            friction=in_range(friction, 0.0, np.inf, f"{where}: friction"),
+            restitution=in_range(restitution, 0.0, 1.0, f"{where}: restitution"),
         )
         if motion == STATIC and (np.any(spec.velocity) or np.any(spec.angular_velocity)):
             raise ValueError(f"{where}: a static body cannot have a velocity")
@@ -171,29 +171,17 @@ class Scene:
         if (mass is None) == (density is None):
             raise ValueError(f"{where}: give exactly one of mass (kg) or density (kg/m^3)")
         if density is not None:
-            density = _in_range(density, 0.0, np.inf, f"{where}: density", open_low=True)
+            density = in_range(density, 0.0, np.inf, f"{where}: density", open_low=True,
+                               unit="kg/m^3")
             props = mass_properties(shape, density)
         else:
-            mass = _in_range(mass, 0.0, np.inf, f"{where}: mass", open_low=True)
+            mass = in_range(mass, 0.0, np.inf, f"{where}: mass", open_low=True, unit="kg")
             unit = mass_properties(shape, 1.0)
             scale = mass / unit.mass
             props = MassProperties(mass, unit.center, unit.inertia * scale)
         if inertia is not None:
             props = MassProperties(props.mass, props.center, _inertia_tensor(inertia, where))
         return props
-
-
-def _in_range(value, low: float, high: float, where: str, open_low: bool = False) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{where}: expected a number, got {value!r}") from exc
-    below = x <= low if open_low else x < low
-    if not np.isfinite(x) or below or x > high:
-        bracket = "(" if open_low else "["
-        upper = "inf)" if np.isinf(high) else f"{high}]"
-        raise ValueError(f"{where}: must be finite and in {bracket}{low}, {upper}, got {value!r}")
-    return x
 
 
 def _inertia_tensor(inertia, where: str) -> np.ndarray:

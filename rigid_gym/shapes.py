@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike
 
 from rigid_gym import _core
 from rigid_gym import quaternion as quat
-from rigid_gym.checks import finite_array, positive
+from rigid_gym.checks import finite_array, integer, positive
 
 
 @dataclass(frozen=True)
@@ -120,9 +120,7 @@ class Mesh:
     sdf_resolution: int = 32
 
     def __post_init__(self):
-        if (isinstance(self.sdf_resolution, bool) or not isinstance(self.sdf_resolution, (int, np.integer))
-                or not 4 <= self.sdf_resolution <= 512):
-            raise ValueError(f"Mesh.sdf_resolution: must be an int in [4, 512], got {self.sdf_resolution!r}")
+        integer(self.sdf_resolution, "Mesh.sdf_resolution", 4, 512)
         v = finite_array(self.vertices, (-1, 3), "Mesh.vertices")
         try:
             t = np.array(self.triangles, dtype=np.int64)

@@ -22,6 +22,7 @@ import numpy as np
 from rigid_gym import _core, pipeline
 from rigid_gym import quaternion as quat
 from rigid_gym._core import DYNAMIC, STATIC
+from rigid_gym.checks import in_range, integer
 from rigid_gym.collision import Contacts, uses_sweep
 from rigid_gym.config import SolverConfig
 from rigid_gym.geometry import compile_geometry, max_pair_contacts
@@ -98,15 +99,11 @@ class World:
             raise ValueError(f"World.dt: expected a number of seconds, got {dt!r}") from exc
         if not np.isfinite(dt) or dt <= 0.0:
             raise ValueError(f"World.dt: must be finite and > 0 s, got {dt!r}")
-        if num_worlds is not None and (
-            isinstance(num_worlds, bool) or not isinstance(num_worlds, (int, np.integer))
-            or num_worlds < 1
-        ):
-            raise ValueError(f"World.num_worlds: must be None or an int >= 1, got {num_worlds!r}")
         self.scene = scene
         self.dt = dt
         self.batched = num_worlds is not None
-        self.num_worlds = 1 if num_worlds is None else int(num_worlds)
+        self.num_worlds = 1 if num_worlds is None else integer(num_worlds, "World.num_worlds", 1,
+                                                                other="None")
         self.config = SolverConfig.for_scene(scene) if config is None else config
         self._config_from_scene = config is None
         if not isinstance(profile, bool):
@@ -402,7 +399,8 @@ class World:
             if m.motion[i] != DYNAMIC:
                 raise ValueError(f"World.set_material: {name} is not dynamic (infinite mass); "
                                  "only a dynamic body's mass can be set")
-            value = self._scalars(mass, "mass", "set_material", worlds, 0.0, np.inf, open_low=True)
+            value = self._scalars(mass, "mass", "set_material", worlds, 0.0, np.inf, open_low=True,
+                                  unit="kg")
             spec = self.scene.bodies[i]
             omega = self.state.angular_velocity[worlds, i].copy()
             m.inverse_mass[worlds, i] = 1.0 / value
@@ -494,19 +492,12 @@ class World:
         n = len(self.scene)
         if isinstance(body, str):
             return self.scene.index(body)
-        if isinstance(body, bool) or not isinstance(body, (int, np.integer)) or not 0 <= body < n:
-            raise ValueError(f"World.{method}: body must be an index in [0, {n - 1}] or a name, "
-                             f"got {body!r}")
-        return int(body)
+        return integer(body, f"World.{method}: body", 0, n - 1, other="a name")
 
     def _worlds(self, world, method: str):
         if world is None:
             return slice(None)
-        b = self.num_worlds
-        if isinstance(world, bool) or not isinstance(world, (int, np.integer)) or not 0 <= world < b:
-            raise ValueError(f"World.{method}: world must be None or an index in [0, {b - 1}], "
-                             f"got {world!r}")
-        return int(world)
+        return integer(world, f"World.{method}: world", 0, self.num_worlds - 1, other="None")
 
     def _values(self, value, field: str, method: str, worlds, size: int = 3) -> np.ndarray:
         arr = np.asarray(value, dtype=np.float64)
@@ -519,20 +510,15 @@ class World:
         return arr
 
     def _scalars(self, value, field: str, method: str, worlds, low: float, high: float,
-                 open_low: bool = False) -> np.ndarray:
+                 open_low: bool = False, unit: str = "") -> np.ndarray:
         """``value`` as a float64 scalar, or (B,) for every world when ``worlds`` is all of
-        them, checked to lie in [low, high] ((low, high] with ``open_low``)."""
+        them, checked to lie in [low, high] ((low, high] with ``open_low``) in ``unit``."""
         arr = np.asarray(value, dtype=np.float64)
         shapes = [()] + ([(self.num_worlds,)] if worlds == slice(None) else [])
         if arr.shape not in shapes:
             raise ValueError(f"World.{method}: {field} must have shape "
                              f"{' or '.join(map(str, shapes))}, got {arr.shape}")
-        above_low = arr > low if open_low else arr >= low
-        if not np.all(np.isfinite(arr) & above_low & (arr <= high)):
-            upper = "inf)" if np.isinf(high) else f"{high:g}]"
-            raise ValueError(f"World.{method}: {field} must be finite and in "
-                             f"{'(' if open_low else '['}{low:g}, {upper}, got {arr.tolist()}")
-        return arr
+        return in_range(arr, low, high, f"World.{method}: {field}", open_low=open_low, unit=unit)
 
 
 class WorldView:

@@ -90,7 +90,7 @@ def test_bad_arguments_are_refused(tmp_path):
         train("rigid_gym/Nope-v0", out=tmp_path)
     with pytest.raises(ValueError, match="algo must be one of"):
         train("rigid_gym/Push-v0", algo="dqn", out=tmp_path)
-    with pytest.raises(ValueError, match="timesteps must be an int >= 1"):
+    with pytest.raises(ValueError, match="train: timesteps: must be an int >= 1"):
         train("rigid_gym/Push-v0", timesteps=0, out=tmp_path)
     with pytest.raises(ValueError, match="ppo has none"):
         train("rigid_gym/PushDense-v0", demonstrations=1, out=tmp_path)
@@ -277,8 +277,8 @@ def rollout_demonstrations(model, env_id: str, episodes: int, seed: int) -> None
         next_obs, rewards, dones, infos = env.step(actions)
         stored = {key: value.copy() for key, value in next_obs.items()}
         for i in np.flatnonzero(dones):
-            for key in stored:
-                stored[key][i] = infos[i]["terminal_observation"][key]
+            for key, value in stored.items():
+                value[i] = infos[i]["terminal_observation"][key]
         for buffer in buffers:
             buffer.add(obs, stored, model.policy.scale_action(actions), rewards, dones, infos)
         obs, finished = next_obs, finished + int(dones.sum())

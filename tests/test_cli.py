@@ -34,11 +34,8 @@ def test_demo_prints_each_result_next_to_its_closed_form(capsys):
     (["demo", "--dt", "-1"], "must be in [1e-06, 0.1], got -1"),
     (["demo", "--steps", "many"], "expected int, got 'many'"),
 ])
-def test_bad_arguments_fail_with_the_allowed_range(args, message, capsys):
-    with pytest.raises(SystemExit) as exit_info:
-        main(args)
-    assert exit_info.value.code == 2
-    assert message in capsys.readouterr().err
+def test_bad_arguments_fail_with_the_allowed_range(args, message, usage_error):
+    assert message in usage_error(args)
 
 
 # -- record and replay ----------------------------------------------------------------------------
@@ -81,15 +78,14 @@ def sb3_model(algorithm: str):
 
 @pytest.mark.parametrize("algorithm", ["ppo", "sac"])
 def test_record_a_stable_baselines3_model_reads_its_algorithm_from_the_zip(algorithm, tmp_path,
-                                                                           capsys):
+                                                                           usage_error):
     model = tmp_path / f"{algorithm}_throw.zip"
     sb3_model(algorithm).save(model)
     assert main(["record", "rigid_gym/Throw-v0", "--policy", str(model), "--out",
                  str(tmp_path)]) == 0
     assert (tmp_path / "rigid_gym-Throw-v0" / f"{algorithm}_throw-seed0-episode-0.rrd").is_file()
-    with pytest.raises(SystemExit):
-        main(["record", "rigid_gym/Push-v0", "--policy", str(model), "--out", str(tmp_path)])
-    assert "does not fit rigid_gym/Push-v0" in capsys.readouterr().err
+    assert "does not fit rigid_gym/Push-v0" in usage_error(
+        ["record", "rigid_gym/Push-v0", "--policy", str(model), "--out", str(tmp_path)])
 
 
 @pytest.mark.parametrize("args, message", [
@@ -100,11 +96,8 @@ def test_record_a_stable_baselines3_model_reads_its_algorithm_from_the_zip(algor
     (["record", "rigid_gym/Push-v0", "--policy", "missing.zip"], "no model file at missing.zip"),
     (["record", "rigid_gym/Push-v0", "--run", "a/b"], "RecordRerun.run: must be a non-empty"),
 ])
-def test_bad_record_arguments_fail_clearly(args, message, capsys):
-    with pytest.raises(SystemExit) as exit_info:
-        main(args)
-    assert exit_info.value.code == 2
-    assert message in capsys.readouterr().err
+def test_bad_record_arguments_fail_clearly(args, message, usage_error):
+    assert message in usage_error(args)
 
 
 def test_replay_runs_the_viewer_installed_with_this_python(tmp_path, monkeypatch):
@@ -120,7 +113,8 @@ def test_replay_runs_the_viewer_installed_with_this_python(tmp_path, monkeypatch
     viewer = cli.find_rerun()
     assert os.path.dirname(viewer) in (sysconfig.get_path("scripts"),
                                        os.path.dirname(sys.executable))
-    version = subprocess.run([viewer, "--version"], capture_output=True, text=True).stdout
+    version = subprocess.run([viewer, "--version"], check=True, capture_output=True,
+                             text=True).stdout
     assert f"rerun-cli {rerun.__version__}" in version
     # a stand-in viewer that writes down its arguments
     fake, log = tmp_path / "rerun", tmp_path / "args.txt"
@@ -182,7 +176,7 @@ def test_every_committed_model_is_evaluated_with_the_settings_beside_it(name, en
 
     model = Path(__file__).resolve().parent.parent / "agents" / "models" / f"{name}.zip"
     assert main(["evaluate", str(model), "--episodes", "1"]) == 0
-    out, err = capsys.readouterr()
+    out, _err = capsys.readouterr()
     assert f"{env_id}: success rate" in out
 
 
@@ -205,7 +199,5 @@ def test_train_resumes_from_the_newest_checkpoint(tmp_path, capsys):
     (["train", "rigid_gym/Push-v0", "--steps", "0"], "must be in [1, 1000000000], got 0"),
     (["evaluate", "missing.zip", "--env", "rigid_gym/Push-v0"], "no model file at missing.zip"),
 ])
-def test_bad_train_and_evaluate_arguments_fail_clearly(args, message, capsys):
-    with pytest.raises(SystemExit):
-        main(args)
-    assert message in capsys.readouterr().err
+def test_bad_train_and_evaluate_arguments_fail_clearly(args, message, usage_error):
+    assert message in usage_error(args)

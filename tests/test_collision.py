@@ -231,7 +231,10 @@ def test_capsule_lying_on_a_box_face_touches_at_its_ends():
                                atol=1e-12)
 
 
-def capsule_across_edge(radius, half_length, depth, tilt, offset, box=rg.Box((0.5, 0.5, 0.5))):
+EDGE_BOX = rg.Box((0.5, 0.5, 0.5))
+
+
+def capsule_across_edge(radius, half_length, depth, tilt, offset, box=EDGE_BOX):
     """A capsule whose axis passes the edge {x = z = 0.5} of a static box of half extents 0.5
     at distance radius - depth, its axis tilted by ``tilt`` below +x; the point of the axis
     nearest to the edge lies ``offset`` (m) along the axis from the capsule's centre.
@@ -468,7 +471,7 @@ def test_capsule_lying_in_a_mesh_box_and_across_its_edge():
     assert len(c.depth) == 2
     assert np.all(np.abs(c.depth - 0.01) <= grid_bound(mesh))
     np.testing.assert_allclose(sorted_rows(c.point)[:, :2], [[-0.2, 0.2], [0.4, 0.2]], atol=1e-9)
-    scene, nearest, n = capsule_across_edge(0.1, 0.4, 0.01, np.radians(30), 0.13, box=mesh)
+    scene, _nearest, n = capsule_across_edge(0.1, 0.4, 0.01, np.radians(30), 0.13, box=mesh)
     c = contacts(scene)
     assert len(c.depth) == 1
     assert abs(c.depth[0] - 0.01) <= grid_bound(mesh)
@@ -623,23 +626,23 @@ def rigidly_moved(scene_bodies, q, t):
 
 
 FRAME_SCENES = {
-    "box on tilted ground": [(rg.Plane(), dict(static=True)),
-                             (rg.Box((0.3, 0.2, 0.1)), dict(mass=1.0, position=(0, 0, 0.095)))],
+    "box on tilted ground": [(rg.Plane(), {"static": True}),
+                             (rg.Box((0.3, 0.2, 0.1)), {"mass": 1.0, "position": (0, 0, 0.095)})],
     "edge on box": [(rg.Box((0.5, 0.5, 0.5)),
-                     dict(static=True, orientation=axis_angle((0, 1, 0), 0.8))),
-                    (rg.Box((0.3, 0.3, 0.3)), dict(mass=1.0, position=(0.05, 0.02, 0.95),
-                                                  orientation=axis_angle((1, 0.2, 0), 0.7)))],
-    "capsule on box": [(rg.Box((0.5, 0.5, 0.5)), dict(static=True)),
-                       (rg.Capsule(0.1, 0.3), dict(mass=1.0, position=(0.1, 0, 0.58),
-                                                   orientation=axis_angle((0, 1, 0.3), 1.3)))],
-    "sphere in bowl": [(bowl_mesh(), dict(static=True)),
-                       (rg.Sphere(0.1), dict(mass=1.0, position=(0.2, 0.1, -0.22)))],
-    "L on box": [(rg.Box((1.0, 1.0, 0.2)), dict(static=True)),
-                 (l_shape_mesh(), dict(density=50.0, position=(-0.3, -0.2, 0.2 + 0.25 - 0.004)))],
-    "compound on ground": [(rg.Plane(), dict(static=True)),
+                     {"static": True, "orientation": axis_angle((0, 1, 0), 0.8)}),
+                    (rg.Box((0.3, 0.3, 0.3)), {"mass": 1.0, "position": (0.05, 0.02, 0.95),
+                                               "orientation": axis_angle((1, 0.2, 0), 0.7)})],
+    "capsule on box": [(rg.Box((0.5, 0.5, 0.5)), {"static": True}),
+                       (rg.Capsule(0.1, 0.3), {"mass": 1.0, "position": (0.1, 0, 0.58),
+                                               "orientation": axis_angle((0, 1, 0.3), 1.3)})],
+    "sphere in bowl": [(bowl_mesh(), {"static": True}),
+                       (rg.Sphere(0.1), {"mass": 1.0, "position": (0.2, 0.1, -0.22)})],
+    "L on box": [(rg.Box((1.0, 1.0, 0.2)), {"static": True}),
+                 (l_shape_mesh(), {"density": 50.0, "position": (-0.3, -0.2, 0.2 + 0.25 - 0.004)})],
+    "compound on ground": [(rg.Plane(), {"static": True}),
                            (rg.Compound(((rg.Box((0.2, 0.1, 0.1)), ((0.2, 0, 0), (1, 0, 0, 0))),
                                          (rg.Sphere(0.1), ((-0.2, 0, 0), (1, 0, 0, 0))))),
-                            dict(mass=1.0, position=(0, 0, 0.097)))],
+                            {"mass": 1.0, "position": (0, 0, 0.097)})],
 }
 
 

@@ -1,6 +1,7 @@
 """The Gymnasium tasks: API conformance, determinism, rewards, the gripper, bad input."""
 
 import warnings
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -8,6 +9,7 @@ import pytest
 from gymnasium.error import ResetNeeded
 from gymnasium.utils.env_checker import check_env
 from rigid_gym._core import gather_observations
+from rigid_gym.envs.core import ALL
 from rigid_gym.envs.effector import PAD_HALF_EXTENTS, Workspace
 from rigid_gym.envs.scripted import scripted_policy
 from rigid_gym.envs.task import CUBE_HALF, CUBE_MASS, STEP_TIME
@@ -133,7 +135,7 @@ def test_terminate_on_success_ends_the_episode():
     policy = scripted_policy(env)
     obs, _ = env.reset(seed=0)
     for step in range(50):
-        obs, reward, terminated, truncated, info = env.step(policy(obs))
+        obs, reward, terminated, _truncated, info = env.step(policy(obs))
         if terminated:
             break
     assert terminated and info["is_success"] and reward == 0.0 and step < 49
@@ -326,7 +328,7 @@ def test_stepping_before_reset_is_refused():
     ({"colour": "red"}, "unexpected keyword"),
     ({"reward_type": "staged"}, "reward_type must be"),
     ({"render_mode": "ansi"}, "render_mode must be"),
-    ({"observation_noise": -0.1}, "observation_noise must be"),
+    ({"observation_noise": -0.1}, "observation_noise: must be finite and >= 0, got -0.1"),
     ({"randomize": {"gravity": (0, 1)}}, "unknown key"),
     ({"randomize": {"mass": (2.0, 1.0)}}, "low <= high"),
     ({"randomize": {"restitution": (0.0, 1.5)}}, "<= 1.0"),
@@ -390,6 +392,115 @@ def test_a_non_finite_state_is_reported_by_the_env_not_passed_on():
     env.world.state.velocity[0, env.cubes[0], 0] = np.nan  # what a solver failure would leave
     with pytest.raises(RuntimeError, match="non-finite state"):
         env.step(np.zeros(3))
+
+
+LAYOUTS = {
+    "rigid_gym/Push-v0": ["pad.position", "pad.velocity", *(
+        f"cube0.{q}" for q in ("position", "offset", "orientation", "velocity",
+                               "angular_velocity"))],
+    "rigid_gym/Stack-v0": ["pad.position", "pad.velocity", "holding", *(
+        f"cube{k}.{q}" for k in (0, 1) for q in ("position", "offset", "orientation", "velocity",
+                                                 "angular_velocity"))],
+    "rigid_gym/Throw-v0": ["pad.position", "pad.velocity", "holding", *(
+        f"cube0.{q}" for q in ("position", "offset", "orientation", "velocity",
+                               "angular_velocity"))],
+}
+"""Each task's observation fields in order: the committed models were trained on this order."""
+
+
+def rotation_of(q):
+    """The rotation matrix (3, 3) of a unit quaternion (w, x, y, z), written out."""
+    w, x, y, z = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def expected_fields(env):
+    """Every observation field by name, read from the World's API (float64) and the gripper's
+    attachment, independently of the layout and the gather index."""
+    w, pad = env.world, env.gripper.body
+    holding = np.isin(w.attached.parent[0, env.cubes], [pad]).any()
+    fields = {"pad.position": w.position[pad], "pad.velocity": w.velocity[pad],
+              "holding": np.array([1.0 if holding else 0.0])}
+    for k, cube in enumerate(env.cubes):
+        fields |= {f"cube{k}.position": w.position[cube],
+                   f"cube{k}.offset": w.position[cube] - w.position[pad],
+                   f"cube{k}.orientation": w.rotation[cube][:, :2].T.ravel(),
+                   f"cube{k}.velocity": w.velocity[cube],
+                   f"cube{k}.angular_velocity": w.angular_velocity[cube]}
+    return fields
+
+
+def check_fields(env, obs):
+    """Each field of ``obs`` against ``expected_fields`` by name; the orientation also
+    against the cube's quaternion; the goals against the cubes and the episode's targets."""
+    layout = env.task.observation_layout
+    fields = layout.split(obs["observation"])
+    expected = expected_fields(env)
+    for name, value in fields.items():
+        assert value.dtype == np.float32
+        np.testing.assert_array_equal(value, expected[name].astype(np.float32), err_msg=name)
+    for k, cube in enumerate(env.cubes):
+        columns = rotation_of(env.world.orientation[cube])[:, :2].T.ravel()
+        np.testing.assert_allclose(fields[f"cube{k}.orientation"], columns, atol=1e-6)
+    cubes = np.concatenate([env.world.position[c] for c in env.cubes])
+    np.testing.assert_array_equal(obs["achieved_goal"], cubes.astype(np.float32))
+    np.testing.assert_array_equal(obs["desired_goal"], env.core.goals[0].astype(np.float32))
+    return fields
+
+
+@pytest.mark.parametrize("env_id", TASK_IDS)
+def test_every_observation_field_is_the_world_state_it_names(env_id):
+    """The task's layout names its fields in the order the models were trained on, covers
+    the vector exactly and is what the env documents; each field, found by name, is the World
+    state it names: over a scripted episode (the pad moving, cubes carried, held and let go)
+    and in a state where every body's every quantity differs (set through the World's
+    setters), so a swapped or shifted entry fails."""
+    env = make(env_id)
+    layout = env.task.observation_layout
+    assert [f.name for f in layout.fields] == LAYOUTS[env_id]
+    assert env.observation_space["observation"].shape == (layout.size,)
+    ends = np.cumsum([f.size for f in layout.fields])
+    assert [(s.start, s.stop) for s in layout.slices.values()] == list(
+        zip([0, *ends[:-1]], ends))
+    assert ends[-1] == layout.size
+    for field, s in zip(layout.fields, layout.slices.values()):
+        assert f"| {s.start}:{s.stop} | {field.name} | {field.content} |" in type(env).__doc__
+    policy = scripted_policy(env)
+    obs, _ = env.reset(seed=1)
+    check_fields(env, obs)
+    held = []
+    for _ in range(gym.spec(env_id).max_episode_steps):
+        obs = env.step(policy(obs))[0]
+        held.append(check_fields(env, obs).get("holding", [0.0])[0])
+    if env.task.has_grip:
+        assert 0.0 in held and 1.0 in held  # the flag read both ways
+    rng = np.random.default_rng(7)
+    w = env.world
+    for body in [env.gripper.body, *env.cubes]:  # the pad never turns
+        q = rng.normal(size=4) if body != env.gripper.body else None
+        w.set_pose(body, rng.uniform(-0.3, 0.3, 3), None if q is None else q / np.linalg.norm(q))
+        w.set_velocity(body, rng.normal(size=3), None if q is None else rng.normal(size=3))
+    batch = env.core.observe(ALL).observations  # a batch of one
+    fields = check_fields(env, {key: value[0] for key, value in batch.items()})
+    values = np.concatenate([fields[name] for name in LAYOUTS[env_id] if name != "holding"])
+    assert len(np.unique(values)) == len(values)  # no two entries alike: a mix-up would show
+
+
+def test_the_readme_task_table_states_each_task_s_sizes():
+    """The README's table of tasks (action, observation / goal sizes, episode steps) against
+    the envs' spaces, which the tasks' layouts make."""
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text()
+    for env_id in TASK_IDS:
+        name = env_id.split("/")[1]
+        row = next(line for line in readme.splitlines() if line.startswith(f"| `{name}`"))
+        cells = [cell.strip() for cell in row.strip("|").split("|")]
+        env = make(env_id)
+        space = env.observation_space
+        assert cells[2:] == [str(env.action_space.shape[0]),
+                             f"{space['observation'].shape[0]} / {space['desired_goal'].shape[0]}",
+                             str(gym.spec(env_id).max_episode_steps)]
 
 
 def test_observations_are_the_state_entries_their_index_names():

@@ -200,7 +200,7 @@ def test_signed_distance_of_mesh_cube_equals_box():
 
 def test_signed_distance_of_the_l():
     """Hand values, and the sign agrees with the union of its two boxes everywhere."""
-    t, hz = L_THICKNESS, L_HALF_DEPTH
+    t = L_THICKNESS
     mesh = l_shape_mesh(L_OUTER, L_THICKNESS, L_HALF_DEPTH)
     points = np.array([[t + 0.1, t + 0.05, 0.0],  # in the notch, 0.05 m from the inner wall
                        [0.1, 0.1, 0.0],  # inside, 0.1 m from the two outer walls

@@ -199,10 +199,10 @@ def test_rgb_array_frames_are_unchanged_by_the_obs_mode():
 
 @pytest.mark.parametrize("kwargs, message", [
     ({"obs_mode": "rgb"}, r"obs_mode must be one of \['state', 'pixels', 'state\+pixels'\]"),
-    ({"obs_mode": "pixels", "width": 8}, r"width must be an int in \[16, 1024\] pixels, got 8"),
-    ({"obs_mode": "pixels", "height": 2000}, r"height must be an int in \[16, 1024\]"),
-    ({"obs_mode": "pixels", "width": 84.0}, r"width must be an int .* got 84.0"),
-    ({"obs_mode": "pixels", "width": True}, r"width must be an int"),
+    ({"obs_mode": "pixels", "width": 8}, r"width: must be an int in \[16, 1024\] pixels, got 8"),
+    ({"obs_mode": "pixels", "height": 2000}, r"height: must be an int in \[16, 1024\] pixels, got 2000"),
+    ({"obs_mode": "pixels", "width": 84.0}, r"width: must be an int .* got 84.0"),
+    ({"obs_mode": "pixels", "width": True}, r"width: must be an int .* got True"),
     ({"obs_mode": "pixels", "camera": "wrist"},
      (r"camera must be one of \['front', 'top', 'side'\] or a rigid_gym.render.Camera, "
       r"got 'wrist'")),

@@ -101,7 +101,7 @@ def xyzw(orientation: np.ndarray) -> np.ndarray:
 def verified(path) -> bool:
     """Whether ``path`` is a complete rerun file (``rerun rrd verify``: CRCs, footer)."""
     return subprocess.run([find_rerun(), "rrd", "verify", str(path)],
-                          capture_output=True).returncode == 0
+                          check=False, capture_output=True).returncode == 0
 
 
 # -- an env episode -------------------------------------------------------------------------------
@@ -357,7 +357,8 @@ def test_a_process_that_dies_of_an_exception_leaves_a_complete_file(tmp_path):
             env.step(env.action_space.sample())
         raise RuntimeError("the training loop crashed")
     """)
-    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    result = subprocess.run([sys.executable, "-c", script], check=False, capture_output=True,
+                            text=True)
     assert "the training loop crashed" in result.stderr
     path = tmp_path / "rigid_gym-Throw-v0" / "died-episode-0.rrd"
     step, _ = temporal(path, "/world/bodies/cube0", "Transform3D:translation")
@@ -461,7 +462,7 @@ def unwritable_folder(tmp_path):
     folder.chmod(0o555)
     immutable = (writable(folder) and shutil.which("chattr") is not None
                  and subprocess.run(["chattr", "+i", str(folder)],
-                                    capture_output=True).returncode == 0)
+                                    check=False, capture_output=True).returncode == 0)
     if writable(folder):
         folder.chmod(0o755)
         pytest.skip("no way to make a folder unwritable here")
@@ -673,7 +674,7 @@ def test_subproc_vec_env_workers_write_complete_files(tmp_path):
     ({"run": ""}, "RecordRerun.run: must be a non-empty name"),
     ({"episode_trigger": 3}, "RecordRerun.episode_trigger: expected a function"),
     ({"contacts": "yes"}, "RecordRerun.contacts: must be a bool"),
-    ({"force_scale": -1.0}, "RecordRerun.force_scale: must be a finite number of m per N > 0"),
+    ({"force_scale": -1.0}, "RecordRerun.force_scale: must be finite and > 0 m per N, got -1.0"),
     ({"chunk_steps": 0}, "RecordRerun.chunk_steps: must be an int >= 1, got 0"),
 ])
 def test_bad_wrapper_arguments_are_refused(kwargs, message, tmp_path):

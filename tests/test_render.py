@@ -143,9 +143,9 @@ def test_near_box_occludes_far_box_whatever_the_body_order():
     assert images[0].tobytes() == images[1].tobytes()
     (centre,), _ = camera.project([(0.5, -0.5, 0.4)], 64, 64)
     i, j = int(centre[1]), int(centre[0])
-    r, g, b = images[0][i, j].astype(int)
+    r, _, b = images[0][i, j].astype(int)
     assert r > 2 * b
-    r, g, b = images[0][i, j + 8].astype(int)
+    r, _, b = images[0][i, j + 8].astype(int)
     assert b > 2 * r
 
 
@@ -296,21 +296,22 @@ def add_marker(shape, **kwargs):
     (lambda: Camera(eye=(0, 0, 1), target=(0, 0, 0)), r"Camera.up: must be nonzero and not par"),
     (lambda: Camera(eye=(0, 0, np.nan)), r"Camera.eye: must be finite"),
     (lambda: Renderer(two_bodies(), colors={0: (1.2, 0, 0)}),
-     r"Renderer.colors\[0\]: RGB channels must be in \[0, 1\]"),
+     r"Renderer.colors\[0\] \(RGB channels\): must be finite and in \[0, 1\], got \[1.2, 0.0"),
     (lambda: Renderer(two_bodies(), colors={5: (1, 0, 0)}),
-     r"Renderer.colors key: must be an int in \[0, 2\)"),
+     r"Renderer.colors key \(one of 2 bodies\): must be an int in \[0, 1\], got 5"),
     (lambda: Renderer(two_bodies(), light_direction=(0, 0, 0)),
      r"Renderer.light_direction: must be nonzero"),
     (lambda: render_with(np.zeros((1, 3)), np.tile(IDENTITY, (2, 1))),
      r"Renderer.render.position: expected shape \(2, 3\)"),
     (lambda: render_with(np.zeros((2, 3)), np.zeros((2, 4))),
      r"Renderer.render.orientation: quaternion"),
-    (lambda: add_marker(rg.Sphere(0.1), alpha=0.0), r"alpha must be in \(0, 1\]"),
+    (lambda: add_marker(rg.Sphere(0.1), alpha=0.0),
+     r"alpha: must be finite and in \(0, 1\], got 0.0"),
     (lambda: add_marker(rg.Plane()), r"shape must be Sphere, Box, Capsule, Mesh or Compound"),
     (lambda: add_marker(rg.Sphere(0.1), color=(0, 0, -1)),
-     r"color: RGB channels must be in \[0, 1\]"),
+     r"color \(RGB channels\): must be finite and in \[0, 1\], got \[0.0, 0.0, -1.0\]"),
     (lambda: Renderer(two_bodies()).set_marker(0, (0, 0, 0)),
-     r"Renderer.set_marker.index: must be an int in \[0, 0\) \(there are 0 markers\)"),
+     r"Renderer.set_marker.index: there are no markers to index, got 0"),
     (lambda: tessellate("sphere"), r"tessellate.shape: expected Sphere"),
     (lambda: tessellate(rg.Plane(), plane_half_size=-1.0),
      r"tessellate.plane_half_size: must be finite and > 0"),

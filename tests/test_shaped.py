@@ -1,5 +1,7 @@
 """The shaped reward (reward_type="shaped"): its stages, their order, bounds, and the env."""
 
+import itertools
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -22,7 +24,7 @@ def along(start, end, n=12):
 
 
 def strictly_increasing(values):
-    return all(b > a for a, b in zip(values, values[1:]))
+    return all(b > a for a, b in itertools.pairwise(values))
 
 
 def test_push_rewards_the_approach_then_the_cube_nearing_the_target():

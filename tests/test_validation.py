@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import rigid_gym as rg
+from rigid_gym.checks import in_range, integer
 
 
 def scene_with(**body):
@@ -15,24 +16,24 @@ def scene_with(**body):
 @pytest.mark.parametrize(
     "kwargs, message",
     [
-        (dict(mass=-1.0), r"body 0 \('ball'\): mass: must be finite and in \(0.0, inf\), got -1"),
-        (dict(mass=0.0), r"mass: must be finite and in \(0.0"),
-        (dict(density=-5.0), r"density: must be finite"),
-        (dict(mass=np.nan), r"mass: must be finite"),
-        (dict(mass=1.0, density=1.0), r"exactly one of mass"),
-        (dict(), r"exactly one of mass"),
-        (dict(mass=1.0, position=(0, np.nan, 0)), r"body 0 \('ball'\): position: must be finite"),
-        (dict(mass=1.0, velocity=(np.inf, 0, 0)), r"velocity: must be finite"),
-        (dict(mass=1.0, position=(0, 0)), r"position: expected shape \(3,\)"),
-        (dict(mass=1.0, orientation=(1, 0, 0, 0.1)), r"orientation: quaternion .* unit norm"),
-        (dict(mass=1.0, friction=-0.1), r"friction: must be finite and in \[0.0, inf\)"),
-        (dict(mass=1.0, restitution=1.5), r"restitution: must be finite and in \[0.0, 1.0\]"),
-        (dict(mass=1.0, inertia=(1.0, 1.0, 3.0)), r"triangle inequality"),
-        (dict(mass=1.0, inertia=(-1.0, 1.0, 1.0)), r"moments must be >= 0"),
-        (dict(mass=1.0, inertia=[[1, 0.5, 0], [0, 1, 0], [0, 0, 1]]), r"symmetric"),
-        (dict(mass=1.0, kinematic=True), r"kinematic body has infinite mass"),
-        (dict(shape=rg.Plane(), mass=1.0), r"only static bodies"),
-        (dict(shape="box", mass=1.0), r"shape must be one of"),
+        ({"mass": -1.0}, r"body 0 \('ball'\): mass: must be finite and > 0 kg, got -1.0"),
+        ({"mass": 0.0}, r"mass: must be finite and > 0 kg, got 0.0"),
+        ({"density": -5.0}, r"density: must be finite and > 0 kg/m\^3, got -5.0"),
+        ({"mass": np.nan}, r"mass: must be finite"),
+        ({"mass": 1.0, "density": 1.0}, r"exactly one of mass"),
+        ({}, r"exactly one of mass"),
+        ({"mass": 1.0, "position": (0, np.nan, 0)}, r"body 0 \('ball'\): position: must be finite"),
+        ({"mass": 1.0, "velocity": (np.inf, 0, 0)}, r"velocity: must be finite"),
+        ({"mass": 1.0, "position": (0, 0)}, r"position: expected shape \(3,\)"),
+        ({"mass": 1.0, "orientation": (1, 0, 0, 0.1)}, r"orientation: quaternion .* unit norm"),
+        ({"mass": 1.0, "friction": -0.1}, r"friction: must be finite and >= 0, got -0.1"),
+        ({"mass": 1.0, "restitution": 1.5}, r"restitution: must be finite and in \[0, 1\], got 1.5"),
+        ({"mass": 1.0, "inertia": (1.0, 1.0, 3.0)}, r"triangle inequality"),
+        ({"mass": 1.0, "inertia": (-1.0, 1.0, 1.0)}, r"moments must be >= 0"),
+        ({"mass": 1.0, "inertia": [[1, 0.5, 0], [0, 1, 0], [0, 0, 1]]}, r"symmetric"),
+        ({"mass": 1.0, "kinematic": True}, r"kinematic body has infinite mass"),
+        ({"shape": rg.Plane(), "mass": 1.0}, r"only static bodies"),
+        ({"shape": "box", "mass": 1.0}, r"shape must be one of"),
     ],
 )
 def test_bad_body_is_rejected_naming_body_and_field(kwargs, message):
@@ -118,9 +119,9 @@ def test_bad_setter_input_is_rejected():
     world = rg.World(scene_with(mass=1.0), num_worlds=3)
     with pytest.raises(ValueError, match=r"set_velocity: velocity must be finite"):
         world.set_velocity(0, (np.nan, 0, 0))
-    with pytest.raises(ValueError, match=r"body must be an index in \[0, 0\]"):
+    with pytest.raises(ValueError, match=r"World.set_velocity: body: must be a name or an int in \[0, 0\], got 4"):
         world.set_velocity(4, (0, 0, 0))
-    with pytest.raises(ValueError, match=r"world must be None or an index in \[0, 2\]"):
+    with pytest.raises(ValueError, match=r"World.apply_force: world: must be None or an int in \[0, 2\], got 3"):
         world.apply_force(0, (0, 0, 1), world=3)
     with pytest.raises(ValueError, match=r"orientation"):
         world.set_pose(0, orientation=(1, 1, 0, 0))
@@ -133,10 +134,11 @@ def test_bad_material_is_rejected_naming_the_range():
     ground = scene.add_ground()
     cube = scene.add_body(rg.Box((0.05,) * 3), mass=1.0, position=(0, 0, 0.05))
     world = rg.World(scene)
-    for kwargs, message in (({"mass": 0.0}, r"mass must be finite and in \(0, inf\)"),
-                            ({"mass": np.nan}, "mass must be finite"),
-                            ({"friction": -0.1}, r"friction must be finite and in \[0, inf\)"),
-                            ({"restitution": 1.5}, r"restitution must be finite and in \[0, 1\]"),
+    for kwargs, message in (({"mass": 0.0}, r"mass: must be finite and > 0 kg, got 0.0"),
+                            ({"mass": np.nan}, "mass: must be finite"),
+                            ({"friction": -0.1}, r"friction: must be finite and >= 0, got -0.1"),
+                            ({"restitution": 1.5},
+                             r"restitution: must be finite and in \[0, 1\], got 1.5"),
                             ({"mass": [1.0, 2.0]}, r"mass must have shape \(\)")):
         with pytest.raises(ValueError, match=message):
             world.set_material(cube, **kwargs)
@@ -155,3 +157,31 @@ def test_bad_solver_config_is_rejected():
         rg.SolverConfig(rotation_order=4)
     with pytest.raises(ValueError, match="unknown option"):
         rg.SolverConfig.for_scene(rg.Scene(), rotation_ordr=2)
+
+
+@pytest.mark.parametrize("check, message", [
+    (lambda: integer(True, "f.n", 1), r"^f\.n: must be an int >= 1, got True$"),
+    (lambda: integer(2.0, "f.n", 1), r"^f\.n: must be an int >= 1, got 2\.0$"),
+    (lambda: integer(np.int64(5), "f.n", 0, 4),
+     r"^f\.n: must be an int in \[0, 4\], got np.int64\(5\)$"),
+    (lambda: integer(-1, "f.n", 0, 4, other="None"),
+     r"^f\.n: must be None or an int in \[0, 4\], got -1$"),
+    (lambda: integer(9, "f.n", high=8, unit="pixels"), r"^f\.n: must be an int <= 8 pixels"),
+    (lambda: in_range(0.0, 0.0, np.inf, "f.x", open_low=True, unit="kg"),
+     r"^f\.x: must be finite and > 0 kg, got 0\.0$"),
+    (lambda: in_range(np.inf, 0.0, np.inf, "f.x"), r"^f\.x: must be finite and >= 0, got inf$"),
+    (lambda: in_range([0.5, 1.5], 0.0, 1.0, "f.x"),
+     r"^f\.x: must be finite and in \[0, 1\], got \[0\.5, 1\.5\]$"),
+    (lambda: in_range("a", 0.0, 1.0, "f.x"), r"^f\.x: expected a number, got 'a'$"),
+])
+def test_the_integer_and_range_checks_state_what_where_and_the_allowed_range(check, message):
+    with pytest.raises(ValueError, match=message):
+        check()
+
+
+def test_the_checks_return_the_values_they_pass():
+    assert integer(np.int32(3), "f.n", 0, 3) == 3 and type(integer(np.int32(3), "f.n")) is int
+    assert in_range(1, 0.0, 1.0, "f.x") == 1.0 and type(in_range(1, 0.0, 1.0, "f.x")) is float
+    per_world = in_range(np.array([0.0, 1.0]), 0.0, 1.0, "f.x")
+    assert per_world.dtype == np.float64 and per_world.tolist() == [0.0, 1.0]
+    assert in_range(np.array(0.5), 0.0, 1.0, "f.x").shape == ()

@@ -114,7 +114,7 @@ def test_a_non_finite_copy_is_named():
 
 
 def test_vector_env_refuses_what_it_cannot_do():
-    with pytest.raises(ValueError, match="num_envs must be an int >= 1"):
+    with pytest.raises(ValueError, match="num_envs: must be an int >= 1, got 0"):
         gym.make_vec("rigid_gym/Push-v0", num_envs=0, vectorization_mode="vector_entry_point")
     with pytest.raises(ValueError, match="cannot include 'size'"):
         gym.make_vec("rigid_gym/Push-v0", num_envs=2, vectorization_mode="vector_entry_point",
@@ -221,10 +221,10 @@ def test_sb3_trains_on_the_batched_env(algorithm):
     if algorithm == "sac_her":
         model = sb3.SAC("MultiInputPolicy", envs, replay_buffer_class=sb3.HerReplayBuffer,
                         learning_starts=200, batch_size=32, seed=0,
-                        policy_kwargs=dict(net_arch=[16, 16]))
+                        policy_kwargs={"net_arch": [16, 16]})
     else:
         model = sb3.PPO("MultiInputPolicy", envs, n_steps=64, batch_size=64, seed=0,
-                        policy_kwargs=dict(net_arch=[16, 16]))
+                        policy_kwargs={"net_arch": [16, 16]})
     model.learn(600)
     assert model.num_timesteps >= 600
     assert len(model.ep_info_buffer) >= 8  # 600 steps of 4 envs: episodes of 50 ended
@@ -240,7 +240,7 @@ def test_sb3_adapter_reports_the_last_observation_of_an_episode():
     first = envs.reset()
     assert first["observation"].shape == (2, 24)
     for step in range(50):
-        observation, reward, done, infos = envs.step(np.zeros((2, 3), dtype=np.float32))
+        observation, _reward, done, infos = envs.step(np.zeros((2, 3), dtype=np.float32))
     assert done.all()
     assert all(info["TimeLimit.truncated"] for info in infos)
     assert all(info["terminal_observation"]["observation"].shape == (24,) for info in infos)

@@ -10,6 +10,7 @@ Carlo mass-property estimators against the exact integrals.
 
 from __future__ import annotations
 
+import functools
 import statistics
 import time
 from dataclasses import dataclass
@@ -17,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 import rigid_gym as rg
+from rigid_gym.checks import integer
 from rigid_gym.inertia import mass_properties, mass_properties_grid, mass_properties_monte_carlo
 from rigid_gym.meshes import l_shape_mesh
 from rigid_gym.report.cases import Case
@@ -65,8 +67,7 @@ class Curve:
 
 def median_seconds(call, repeats: int) -> float:
     """Median wall time (s, time.perf_counter) of ``repeats`` calls of ``call()``."""
-    if repeats < 1:
-        raise ValueError(f"median_seconds: repeats must be >= 1, got {repeats!r}")
+    integer(repeats, "median_seconds: repeats", 1)
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
@@ -186,14 +187,15 @@ def sweep_mass_properties(resolutions, samples, repeats: int) -> list[SampledCur
         exact = mass_properties(shape, DENSITY)
         mass_properties_grid(shape, DENSITY, 4)  # warm-up outside the timings
         for method, counts, estimate, seeds in (
-                ("grid", resolutions, lambda n, s: mass_properties_grid(shape, DENSITY, n), [0]),
+                ("grid", resolutions,
+                 lambda n, s, shape=shape: mass_properties_grid(shape, DENSITY, n), [0]),
                 ("Monte Carlo", samples,
-                 lambda n, s: mass_properties_monte_carlo(shape, DENSITY, n, s),
+                 functools.partial(mass_properties_monte_carlo, shape, DENSITY),
                  MONTE_CARLO_SEEDS)):
             points, errors, seconds = [], [], []
             for n in counts:
                 errors.append(inertia_errors([estimate(n, s) for s in seeds], exact)[1])
-                seconds.append(median_seconds(lambda: estimate(n, 0), repeats))
+                seconds.append(median_seconds(functools.partial(estimate, n, 0), repeats))
                 points.append(n ** 3 if method == "grid" else n)
             curves.append(SampledCurve(name, method, np.array(points, dtype=np.float64),
                                        np.array(errors), np.array(seconds)))

@@ -60,7 +60,7 @@ FREE_FALL_SECONDS = 1.0
 def free_fall_error(world: rg.World) -> tuple[float]:
     """|x(T) - x0 - v0 T - g T^2/2| / |g T^2/2| after T = 1 s of flight."""
     body = world.scene.bodies[0]
-    world.step(int(round(FREE_FALL_SECONDS / world.dt)))
+    world.step(round(FREE_FALL_SECONDS / world.dt))
     exact, _ = analytic.free_fall_continuous(body.position, body.velocity, world.scene.gravity,
                                              world.time)
     scale = 0.5 * np.linalg.norm(world.scene.gravity) * world.time ** 2
@@ -130,7 +130,7 @@ def incline_slide_error(world: rg.World) -> tuple[float]:
     """|a - g (sin theta - mu cos theta)| / that, a from the velocity change between t = 0.5
     and 1 s (theta = 30 deg, tan theta > mu: sliding)."""
     theta = np.radians(30.0)
-    half = int(round(0.5 / world.dt))
+    half = round(0.5 / world.dt)
     world.step(half)
     v0 = world.velocity[1].copy()
     world.step(half)
@@ -142,7 +142,7 @@ def incline_slide_error(world: rg.World) -> tuple[float]:
 def incline_stick_error(world: rg.World) -> tuple[float]:
     """Distance (m) the block creeps between t = 1 and 2 s (theta = 20 deg, tan theta < mu:
     the exact answer is 0)."""
-    second = int(round(1.0 / world.dt))
+    second = round(1.0 / world.dt)
     world.step(second)
     start = world.position[1].copy()
     world.step(second)
@@ -154,7 +154,7 @@ ROLL_SPEED = 2.0
 
 def rolling_error(world: rg.World) -> tuple[float]:
     """|v - 5/7 v0| / (5/7 v0) after 1 s (rolling starts at 2 v0 / (7 mu g) = 0.19 s)."""
-    world.step(int(round(1.0 / world.dt)))
+    world.step(round(1.0 / world.dt))
     return (abs(world.velocity[1, 0] / (5 / 7 * ROLL_SPEED) - 1.0),)
 
 
@@ -168,7 +168,7 @@ def torque_free_errors(world: rg.World) -> tuple[float, float, float]:
     |E / E0 - 1|, and the relative error of the mean time between reversals of omega_2 (the
     intermediate-axis flip, 2 K(m) / lambda = 3.17 s; reversals found by linear interpolation
     between steps)."""
-    steps = int(round(TOP_SECONDS / world.dt))
+    steps = round(TOP_SECONDS / world.dt)
     times = world.dt * np.arange(1, steps + 1)
     exact = analytic.torque_free_angular_velocity(TOP_MOMENTS, TOP_OMEGA, times)
     e0 = world.kinetic_energy()
@@ -194,7 +194,7 @@ STACK_COUNT, STACK_SECONDS = 10, 2.0
 def stack_drift(world: rg.World) -> tuple[float]:
     """Largest displacement (m) of any cube of a resting 10-cube stack after 2 s (exact: 0)."""
     start = world.position.copy()
-    world.step(int(round(STACK_SECONDS / world.dt)))
+    world.step(round(STACK_SECONDS / world.dt))
     return (float(np.abs(world.position - start).max()),)
 
 
@@ -205,7 +205,7 @@ def spin_up_error(world: rg.World) -> tuple[float]:
     """|theta(T) - tau T^2 / (2 I_z)| / that: a free body at rest turned by a constant torque
     about its principal z axis for T = 0.5 s (a rotation about a fixed axis: exact at every
     rotation order that integrates the torque at the order it claims)."""
-    steps = int(round(SPIN_SECONDS / world.dt))
+    steps = round(SPIN_SECONDS / world.dt)
     for _ in range(steps):
         world.apply_torque(0, (0.0, 0.0, SPIN_TORQUE))
         world.step()
@@ -229,7 +229,7 @@ def push_at_top(world: rg.World, force: float, until_tilt_deg: float = 90.0):
     edge_local = np.array([half[0], 0.0, -half[2]])
     edge0 = world.position[1] + world.rotation[1] @ edge_local
     steps = 0
-    for _ in range(int(round(PUSH_SECONDS / world.dt))):
+    for _ in range(round(PUSH_SECONDS / world.dt)):
         top = world.position[1] + world.rotation[1] @ np.array([0.0, 0.0, half[2]])
         world.apply_force(1, (force * G, 0.0, 0.0), point=top)
         world.step()

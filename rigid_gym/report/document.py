@@ -170,15 +170,15 @@ def figure_mass_properties(results: Results, path: Path) -> None:
 def accuracy_section(results: Results) -> list[str]:
     lines = ["## 1. Error against run time", "",
              f"Sweep: dt = {', '.join(dt_label(d) for d in results.dts)} s. {results.settings}",
-             "Error: against the exact answer (column *exact*). Cost: median wall time of "
-             "`World.step` (no queries) per simulated second, s/s. p: observed order, the "
-             "least-squares slope of log(error) against log(dt) over errors above round-off "
-             f"({ROUND_OFF:g}); *exact* where every error is at round-off. Slope vs cost: the "
-             "same against log(cost), the work-precision slope.", "",
+             ("Error: against the exact answer (column *exact*). Cost: median wall time of "
+              "`World.step` (no queries) per simulated second, s/s. p: observed order, the "
+              "least-squares slope of log(error) against log(dt) over errors above round-off "
+              f"({ROUND_OFF:g}); *exact* where every error is at round-off. Slope vs cost: the "
+              "same against log(cost), the work-precision slope."), "",
              f"![work-precision]({IMAGES / 'work_precision.png'})", "",
              f"![torque-free body]({IMAGES / 'torque_free.png'})", "",
-             "| case | exact | setting | p (vs dt) | slope vs cost | error at dt = 1/240 | "
-             "cost at 1/240 (s/s) |", "|---|---|---|---:|---:|---:|---:|"]
+             ("| case | exact | setting | p (vs dt) | slope vs cost | error at dt = 1/240 | "
+              "cost at 1/240 (s/s) |"), "|---|---|---|---:|---:|---:|---:|"]
     for case in CASES:
         for curve in (c for c in results.curves if c.case == case.key):
             for metric, name in enumerate(case.metrics):
@@ -255,16 +255,16 @@ def stiff_section(results: Results) -> list[str]:
 
     failed = [r for r in results.stiff if not r.passed]
     lines = ["## 3. Stiff and extreme cases", "",
-             f"{len(results.stiff) - len(failed)} of {len(results.stiff)} cases pass. Bounds "
-             "(stated before measuring, the same for every case unless the row says otherwise):",
-             "", "- energy growth: E(t) - E(0) <= "
-             f"{stability.ENERGY_ROUND_OFF:g} x (KE0 + sum m g |z|); impulses with restitution "
-             "<= 1 and inelastic contact passes can only remove energy, so anything above "
-             "float64 round-off of the energy sum is an error;",
-             f"- deepest overlap (sampled {stability.PROBES} times and at the end): "
-             f"{stability.PENETRATION_FRACTION:.0%} of the thinnest dimension in contact;",
-             f"- drift of a resting configuration: {stability.DRIFT_BOUND * 1e3:g} mm for any "
-             "body over the run.", ""]
+             (f"{len(results.stiff) - len(failed)} of {len(results.stiff)} cases pass. Bounds "
+              "(stated before measuring, the same for every case unless the row says otherwise):"),
+             "",
+             (f"- energy growth: E(t) - E(0) <= {stability.ENERGY_ROUND_OFF:g} x (KE0 + sum m g "
+              "|z|); impulses with restitution <= 1 and inelastic contact passes can only remove "
+              "energy, so anything above float64 round-off of the energy sum is an error;"),
+             (f"- deepest overlap (sampled {stability.PROBES} times and at the end): "
+              f"{stability.PENETRATION_FRACTION:.0%} of the thinnest dimension in contact;"),
+             (f"- drift of a resting configuration: {stability.DRIFT_BOUND * 1e3:g} mm for any "
+              "body over the run."), ""]
     if failed:
         lines += ["**Failures**", ""]
         for r in failed:
@@ -293,12 +293,12 @@ def stiff_section(results: Results) -> list[str]:
 
 def phase_section(results: Results) -> list[str]:
     lines = ["## 4. Solver phases used", "",
-             "`SolverConfig.for_scene` leaves out what a scene cannot need (no collision phase "
-             "when every restitution is 0, no shock propagation without gravity or supports). "
-             "Below: what each closed-form case left out at dt = 1/240 and the cost against "
-             "every phase on (`SolverConfig()`), with the first error of each (equal when "
-             "leaving the phase out cannot change the answer); differences of a few percent "
-             "are timing noise.", "",
+             ("`SolverConfig.for_scene` leaves out what a scene cannot need (no collision phase "
+              "when every restitution is 0, no shock propagation without gravity or supports). "
+              "Below: what each closed-form case left out at dt = 1/240 and the cost against "
+              "every phase on (`SolverConfig()`), with the first error of each (equal when "
+              "leaving the phase out cannot change the answer); differences of a few percent "
+              "are timing noise."), "",
              "| case | left out | cost (s/s) | all phases on (s/s) | saved | error | error, all on |",
              "|---|---|---:|---:|---:|---:|---:|"]
     for case in CASES:
@@ -309,8 +309,9 @@ def phase_section(results: Results) -> list[str]:
         lines.append(f"| {case.title} | {', '.join(s['left_out']) or 'nothing'} | "
                      f"{fmt(s['cost'])} | {fmt(s['cost_all_on'])} | {saved:.0%} | "
                      f"{fmt(s['error'])} | {fmt(s['error_all_on'])} |")
-    lines += ["", "Share of step time by phase (`World.profile()`; off: phases that did not "
-              "run), closed-form cases at dt = 1/240 with `for_scene`, then the stiff cases:", "",
+    lines += ["",
+              ("Share of step time by phase (`World.profile()`; off: phases that did not run), "
+               "closed-form cases at dt = 1/240 with `for_scene`, then the stiff cases:"), "",
               "| case | cost (s/s) | phases run: share of step time |", "|---|---:|---|"]
     rows = [(case.title, s["cost"], s["profile"]) for case in CASES
             if (s := results.savings.get(case.key))]
@@ -344,11 +345,11 @@ def write(results: Results, out: Path) -> Path:
     figure_mass_properties(results, images / "mass_properties.png")
     stamp = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     lines = ["# Accuracy and stability report", "",
-             f"Generated by `rigid-gym report{' --quick' if results.quick else ''}` "
-             f"({'quick: a tiny sweep, numbers not representative' if results.quick else 'full'}"
-             f") on {stamp}, {platform.machine()} {platform.system()}, Python "
-             f"{platform.python_version()}; the run took {results.seconds / 60:.1f} min. "
-             "Timings depend on the machine and its load; errors do not.", ""]
+             (f"Generated by `rigid-gym report{' --quick' if results.quick else ''}` "
+              f"({'quick: a tiny sweep, numbers not representative' if results.quick else 'full'}"
+              f") on {stamp}, {platform.machine()} {platform.system()}, Python "
+              f"{platform.python_version()}; the run took {results.seconds / 60:.1f} min. "
+              "Timings depend on the machine and its load; errors do not."), ""]
     lines += accuracy_section(results) + mass_section(results)
     lines += stiff_section(results) + phase_section(results)
     path = out / "report.md"

@@ -31,6 +31,7 @@ import numpy as np
 import rigid_gym as rg
 from rigid_gym import quaternion as quat
 from rigid_gym._core import DYNAMIC, STATIC
+from rigid_gym.checks import in_range
 
 PEER_CASES = ("free_fall", "bounce_e05", "bounce_e1", "slide", "incline_slide", "incline_stick",
               "rolling", "torque_free", "stack_drift")
@@ -215,9 +216,7 @@ def damping_ratio(restitution: float) -> float:
     """Damping ratio zeta of a linear spring-damper whose contact (half a damped oscillation)
     ends at e times the approach speed: zeta = -ln e / sqrt(pi^2 + ln^2 e); 1 (critical, no
     rebound) at e = 0, 0 at e = 1. restitution: e in [0, 1]."""
-    e = float(restitution)
-    if not 0.0 <= e <= 1.0:
-        raise ValueError(f"damping_ratio: restitution must be in [0, 1], got {restitution!r}")
+    e = in_range(restitution, 0.0, 1.0, "damping_ratio: restitution")
     if e == 0.0:
         return 1.0
     return float(-np.log(e) / np.hypot(np.pi, np.log(e)))
@@ -263,8 +262,9 @@ def mjcf(scene: rg.Scene, dt: float, integrator: str = "Euler") -> str:
                    f'solref="{_numbers(solref(body.restitution, dt))}"')
         inside = [f"<geom {geom} {contact}/>"]
         if body.motion == DYNAMIC:
-            inside = ["<freejoint/>", f'<inertial pos="0 0 0" mass="{body.mass:.17g}" '
-                      f'diaginertia="{_numbers(body.principal_moments)}"/>', *inside]
+            inertial = (f'<inertial pos="0 0 0" mass="{body.mass:.17g}" '
+                        f'diaginertia="{_numbers(body.principal_moments)}"/>')
+            inside = ["<freejoint/>", inertial, *inside]
             # a free joint's qvel is (linear, world frame; angular, body frame)
             local_w = quat.to_matrix(np.asarray(body.orientation)).T @ body.angular_velocity
             qvel += [*body.velocity, *local_w]

@@ -110,7 +110,7 @@ def simulate(world: rg.World, seconds: float, probes: int = PROBES) -> Run:
     includes a kernel call per phase). Stops early (finite=False) if the state becomes
     non-finite."""
     world.profiling = True
-    steps = int(round(seconds / world.dt))
+    steps = round(seconds / world.dt)
     if steps < 1:
         raise ValueError(f"simulate: seconds must cover at least one step of {world.dt} s, "
                          f"got {seconds!r}")
@@ -274,7 +274,7 @@ def friction_extremes(scale: float) -> list[StiffResult]:
     slide = Check("mu=0 sliding: |v - v0|", float(abs(run.world.velocity[1, 0] - 1.0)), 1e-12,
                   "m/s", "no friction: nothing may slow the box (round-off only)")
     world = rg.World(scenes.incline(30.0, 0.0), dt=1 / 240)
-    world.step(int(round(0.5 / world.dt)))
+    world.step(round(0.5 / world.dt))
     v0 = world.velocity[1].copy()
     incline_run = simulate(world, 0.5)
     a = np.linalg.norm(world.velocity[1] - v0) / 0.5
@@ -290,7 +290,7 @@ def friction_extremes(scale: float) -> list[StiffResult]:
     stop = Check("mu=5 stop distance error", float(abs(run.world.position[1, 0] - exact)),
                  0.01 * exact + v / 240, "m", "as the slide-to-stop test: 1% + v0 dt")
     world = rg.World(scenes.incline(70.0, mu, FLAT_BOX), dt=1 / 240)
-    world.step(int(round(0.5 / world.dt)))
+    world.step(round(0.5 / world.dt))
     hold = simulate(world, seconds)
     creep = Check("mu=5 70 deg incline: creep", hold.drift, 1e-6, "m",
                   "static friction holds exactly (as the 20 deg incline test)")
@@ -378,7 +378,7 @@ def drop_and_settle(scale: float) -> list[StiffResult]:
     for on_cube in (False, True):
         for dt in SETTLE_DTS:
             world = rg.World(scenes.dropped_cubes(1.0, on_cube), dt=dt)
-            world.step(int(round(3.0 / dt)))
+            world.step(round(3.0 / dt))
             top = len(world.position) - 1
             exact = CUBE_HALF * (3 if on_cube else 1)
             error = float(abs(world.position[top, 2] - exact))
