@@ -11,6 +11,11 @@ cost of a phase, not a usable setting: a stack without shock propagation is not 
 
     python benchmarks/solver.py            # the full table (about 10 minutes on 2 cores)
     python benchmarks/solver.py --quick    # 10-stack and small piles only
+    python benchmarks/solver.py --timers   # what timing the stages costs (World(profile=True))
+
+``--timers`` steps one world of each of a free ball (the cheapest step there is), the 10-cube
+stack and a pile of 100 with its stage timers off and on in alternate rounds, and prints the
+median steps/s of each and the difference per step.
 """
 
 import argparse
@@ -21,7 +26,7 @@ import time
 import numpy as np
 
 import rigid_gym as rg
-from rigid_gym.report.scenes import cube_stack, pile, pyramid
+from rigid_gym.report.scenes import cube_stack, free_ball, pile, pyramid
 
 DT = 1 / 240
 
@@ -37,10 +42,35 @@ def steps_per_second(scene, config, settle, steps, repeats):
     return 1.0 / statistics.median(timings)
 
 
+def timer_cost(rounds: int = 21) -> None:
+    """Steps/s with ``World.profiling`` off and on, alternating rounds on one world."""
+    print("| scene | steps/s, timers off | timers on | on / off | cost per step |")
+    print("|---|---:|---:|---:|---:|")
+    cases = (("free ball", free_ball(), 20000), ("10-cube stack", cube_stack(10), 240),
+             ("pile of 100", pile(100), 48))
+    for name, scene, steps in cases:
+        world = rg.World(scene, dt=DT)
+        world.step(240)
+        rates: dict[bool, list[float]] = {False: [], True: []}
+        for k in range(2 * rounds):
+            world.profiling = bool(k % 2)
+            start = time.perf_counter()
+            world.step(steps)
+            rates[world.profiling].append(steps / (time.perf_counter() - start))
+        off, on = statistics.median(rates[False]), statistics.median(rates[True])
+        print(f"| {name} | {off:,.0f} | {on:,.0f} | {on / off:.3f} | "
+              f"{(1.0 / on - 1.0 / off) * 1e9:,.0f} ns |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="10-stack and small piles only")
+    parser.add_argument("--timers", action="store_true",
+                        help="what timing the stages costs (World(profile=True))")
     args = parser.parse_args()
+    if args.timers:
+        timer_cost()
+        return
     scenes = [("10-cube stack", cube_stack(10), 240, 240), ("pile of 10", pile(10), 240, 240)]
     if not args.quick:
         scenes += [("55-box pyramid", pyramid(10), 240, 120), ("pile of 100", pile(100), 240, 48),

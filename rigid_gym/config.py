@@ -23,7 +23,7 @@ ROTATION_ORDERS = (1, 2, 3)
 
 @dataclass(frozen=True)
 class SolverConfig:
-    """Switches and counts for :func:`rigid_gym.pipeline.step`.
+    """Switches and counts for the step (``step_world`` in ``src/step.cpp``).
 
     collision_passes: sweeps of the collision phase (real restitution, old velocities); 0
         switches the phase off. It can only matter when some restitution is > 0.
@@ -105,6 +105,18 @@ class SolverConfig:
         if not np.any(scene.gravity) or dynamic == 0 or (dynamic == 1 and supports == 0):
             derived["shock_sweeps"] = 0
         return cls(**{**derived, **overrides})
+
+    def core_settings(self, gravity: np.ndarray, sweep: bool) -> dict:
+        """The core's view of this config (``Settings`` in ``src/world.h``) for a scene with
+        ``gravity`` (3,) m/s^2, the broad phase by sort and sweep or not."""
+        magnitude = float(np.linalg.norm(gravity))
+        up = -gravity / magnitude if magnitude > 0.0 else np.array([0.0, 0.0, 1.0])
+        return {"collision_passes": self.collision_passes, "contact_passes": self.contact_passes,
+                "shock_sweeps": self.shock_sweeps, "rotation_order": self.rotation_order,
+                "sweep": bool(sweep), "broad_phase": self.phases()["broad_phase"],
+                "sleep": self.sleep, "detect_every_pass": self.detect_every_pass,
+                "keep_energy": self.keep_energy, "overlap_correction": self.overlap_correction,
+                "gravity": magnitude, "up": tuple(float(u) for u in up)}
 
     def phases(self, gravity: bool = True) -> dict[str, bool]:
         """Which phases of the step run, by name, in step order. Shock propagation orders

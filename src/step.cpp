@@ -66,32 +66,37 @@ void clear_impulses(WorldStep& w, int64_t count) {
 // The step's contacts, found by the first impulse stage that needs them (contacts.h), at
 // the poses it predicts: the collision stage's (old velocities, dt^2 g ahead) or the contact
 // and shock stages' (new velocities), which are the same poses until an impulse or a force
-// acts. Found once per step, also when a profiled step runs its stages in separate calls.
+// acts. Found once per step (the broad phase clears the flag).
 void find_contacts(WorldStep& w, int64_t count, double dt, Vec3 lookahead) {
     if (!*w.contacts.detected) {
         detect_contacts(w, count, dt, lookahead);
     }
 }
 
-// The collision, velocity update, contact and shock stages (those whose bits are set) over
-// the first `count` listed pairs (the awake ones, with sleeping).
-void impulse_stages(WorldStep& w, int phases, double dt, int64_t count) {
+// The collision, velocity update, contact and shock stages over the first `count` listed
+// pairs (the awake ones, with sleeping), each counted and timed (timers.h) from `since` on;
+// returns where the next stage starts. A stage with nothing to do (no pair, or switched off)
+// is not run.
+double impulse_stages(WorldStep& w, double dt, int64_t count, double since) {
     const Settings& c = *w.settings;
-    if ((phases & COLLISION_PHASE) && c.collision_passes > 0 && count > 0) {
+    if (c.collision_passes > 0 && count > 0) {
         find_contacts(w, count, dt, collision_lookahead(w.model, dt));
         resolve_world_contacts(w, count, dt, COLLISION, c.collision_passes);
+        since = lap(w.timers, COLLISION_STAGE, since);
     }
-    if (phases & VELOCITY_PHASE) {
-        update_velocities(w.bodies, w.model, dt);
-    }
-    if ((phases & CONTACT_PHASE) && c.contact_passes > 0 && count > 0) {
+    update_velocities(w.bodies, w.model, dt);
+    since = lap(w.timers, VELOCITY_STAGE, since);
+    if (c.contact_passes > 0 && count > 0) {
         find_contacts(w, count, dt, {0.0, 0.0, 0.0});
         resolve_world_contacts(w, count, dt, CONTACT, c.contact_passes);
+        since = lap(w.timers, CONTACT_STAGE, since);
     }
-    if ((phases & SHOCK_PHASE) && c.shock_sweeps > 0 && c.gravity > 0.0 && count > 0) {
+    if (c.shock_sweeps > 0 && c.gravity > 0.0 && count > 0) {
         find_contacts(w, count, dt, {0.0, 0.0, 0.0});
         propagate_world_shock(w, count, dt);
+        since = lap(w.timers, SHOCK_STAGE, since);
     }
+    return since;
 }
 
 }  // namespace
@@ -102,87 +107,94 @@ void impulse_stages(WorldStep& w, int phases, double dt, int64_t count) {
 // its box; if that lists more pairs, the velocities are put back as they were when the
 // impulse stages began and the stages run again with every pair (up to MAX_RELISTS times),
 // so a body is not moved into a neighbour whose pair was never listed. Nothing sleeps then.
-int64_t step_world(WorldStep& w, int64_t steps, int phases, double dt) {
+// Each stage counts its runs in the world's timers and, when timed, its time (timers.h): a
+// relisting's time is the broad phase's (not counted as a run: the broad phase runs once per
+// step), the stages run again count as runs of their own.
+int64_t step_world(WorldStep& w, int64_t steps, double dt) {
     const Settings& c = *w.settings;
     const int64_t capacity = w.pair_capacity();
+    double since = start_timing(w.timers);
     for (int64_t done = 0; done < steps; ++done) {
         // 0. broad phase: every pair whose boxes may meet within this step (velocities
-        //    included); held bodies are put at their place first
-        if (phases & BROAD_PHASE) {
-            place_attached(w.bodies, w.attached);
-            refresh_inverse_inertia(w.bodies, w.model);
-            for (int i = 0; i < w.num_bodies(); ++i) {
-                w.lists.reach[i] = 0.0;
-            }
-            const int64_t count = c.broad_phase ? list_pairs(w, dt, c.gravity) : 0;
-            *w.pair_count = count;
-            if (count > capacity) {
-                return done;
-            }
-            clear_impulses(w, count);
-            keep_velocities(w, true);
-            *w.contacts.detected = 0;
-            *w.rest.awake_pairs = count;
-            if (c.sleep) {
-                mark_asleep(w, count);
-            }
-        }
-        // 1-4. collision, velocity update, contact, shock propagation
-        impulse_stages(w, phases, dt, *w.rest.awake_pairs);
-        // 5. position update with the final velocities
-        if (phases & POSITION_PHASE) {
-            if (c.sleep) {  // the velocity update gave the asleep bodies gravity's share
-                for (int i = 0; i < w.num_bodies(); ++i) {
-                    if (w.rest.asleep[i]) {
-                        keep_velocities(w, false, i);
-                    }
-                }
-            }
-            if (c.broad_phase) {
-                for (int relist = 0; relist < MAX_RELISTS && outgrown(w, dt); ++relist) {
-                    const int64_t count = *w.pair_count;
-                    const int64_t more = list_pairs(w, dt, 0.0);  // the final velocities
-                    if (more == count) {  // boxes only grow: the same count is the same pairs
-                        if (c.sleep) {    // in the order the impulses were recorded in
-                            move_asleep_last(w, count);
-                        }
-                        break;
-                    }
-                    *w.pair_count = more;
-                    keep_velocities(w, false);
-                    wake_world(w, more);
-                    if (more > capacity) {
-                        return done;
-                    }
-                    clear_impulses(w, more);
-                    *w.contacts.detected = 0;
-                    impulse_stages(w, IMPULSE_PHASES, dt, more);
-                }
-            }
-            if (c.sleep) {
-                keep_rest_impulses(w);
-            }
-            if (c.overlap_correction > 0.0 && *w.contacts.detected) {
-                correct_overlap(w, *w.rest.awake_pairs, dt, c.overlap_correction);
-            }
-            count_acting_pairs_of_bodies(w, *w.pair_count);
-            update_positions(w.bodies, w.model, dt, c.rotation_order, c.keep_energy,
-                             {w.pairs_of.data, w.pairs_of.size},
-                             c.sleep ? Span<const uint8_t>{w.rest.asleep.data, w.rest.asleep.size}
-                                     : Span<const uint8_t>{});
-            for (int i = 0; i < w.num_bodies(); ++i) {
-                w.bodies.force[i] = {0.0, 0.0, 0.0};
-                w.bodies.torque[i] = {0.0, 0.0, 0.0};
-            }
-        }
-    }
-    if (phases & POSITION_PHASE) {
+        //    included); held bodies are put at their place first. Counted as a run only when
+        //    it lists pairs (SolverConfig.phases)
         place_attached(w.bodies, w.attached);
+        refresh_inverse_inertia(w.bodies, w.model);
+        for (int i = 0; i < w.num_bodies(); ++i) {
+            w.lists.reach[i] = 0.0;
+        }
+        const int64_t count = c.broad_phase ? list_pairs(w, dt, c.gravity) : 0;
+        *w.pair_count = count;
+        if (count > capacity) {
+            lap(w.timers, BROAD_STAGE, since, 0);  // run again once the buffers have grown
+            return done;
+        }
+        clear_impulses(w, count);
+        keep_velocities(w, true);
+        *w.contacts.detected = 0;
+        *w.rest.awake_pairs = count;
+        if (c.sleep) {
+            mark_asleep(w, count);
+        }
+        since = lap(w.timers, BROAD_STAGE, since, c.broad_phase ? 1 : 0);
+        // 1-4. collision, velocity update, contact, shock propagation
+        since = impulse_stages(w, dt, *w.rest.awake_pairs, since);
+        // 5. position update with the final velocities
+        if (c.sleep) {  // the velocity update gave the asleep bodies gravity's share
+            for (int i = 0; i < w.num_bodies(); ++i) {
+                if (w.rest.asleep[i]) {
+                    keep_velocities(w, false, i);
+                }
+            }
+        }
+        if (c.broad_phase) {
+            for (int relist = 0; relist < MAX_RELISTS && outgrown(w, dt); ++relist) {
+                since = lap(w.timers, POSITION_STAGE, since, 0);
+                const int64_t listed = *w.pair_count;
+                const int64_t more = list_pairs(w, dt, 0.0);  // the final velocities
+                if (more == listed) {  // boxes only grow: the same count is the same pairs
+                    if (c.sleep) {     // in the order the impulses were recorded in
+                        move_asleep_last(w, listed);
+                    }
+                    since = lap(w.timers, BROAD_STAGE, since, 0);
+                    break;
+                }
+                *w.pair_count = more;
+                keep_velocities(w, false);
+                wake_world(w, more);
+                if (more > capacity) {
+                    lap(w.timers, BROAD_STAGE, since, 0);
+                    return done;
+                }
+                clear_impulses(w, more);
+                *w.contacts.detected = 0;
+                since = lap(w.timers, BROAD_STAGE, since, 0);
+                since = impulse_stages(w, dt, more, since);
+            }
+        }
+        if (c.sleep) {
+            keep_rest_impulses(w);
+        }
+        if (c.overlap_correction > 0.0 && *w.contacts.detected) {
+            correct_overlap(w, *w.rest.awake_pairs, dt, c.overlap_correction);
+        }
+        count_acting_pairs_of_bodies(w, *w.pair_count);
+        update_positions(w.bodies, w.model, dt, c.rotation_order, c.keep_energy,
+                         {w.pairs_of.data, w.pairs_of.size},
+                         c.sleep ? Span<const uint8_t>{w.rest.asleep.data, w.rest.asleep.size}
+                                 : Span<const uint8_t>{});
+        for (int i = 0; i < w.num_bodies(); ++i) {
+            w.bodies.force[i] = {0.0, 0.0, 0.0};
+            w.bodies.torque[i] = {0.0, 0.0, 0.0};
+        }
+        since = lap(w.timers, POSITION_STAGE, since);
     }
+    place_attached(w.bodies, w.attached);
+    lap(w.timers, POSITION_STAGE, since, 0);
     return steps;
 }
 
-void advance(StepContext& context, int64_t steps, int phases, double dt) {
+void advance(StepContext& context, int64_t steps, double dt) {
     const int num_worlds = context.num_worlds();
     std::vector<int64_t> done(num_worlds, 0);
     ThreadPool& pool = ThreadPool::instance();
@@ -194,13 +206,11 @@ void advance(StepContext& context, int64_t steps, int phases, double dt) {
             for (int w = first; w < last; ++w) {
                 if (done[w] < steps) {
                     WorldStep rows = context.world(w);
-                    done[w] += step_world(rows, steps - done[w], phases, dt);
+                    done[w] += step_world(rows, steps - done[w], dt);
                 }
             }
         });
-        if (phases & POSITION_PHASE) {  // steps are whole: the pool may grow for the next
-            context.fit_contact_rows();
-        }
+        context.fit_contact_rows();  // the contact pool may grow for the next steps
         if (std::all_of(done.begin(), done.end(), [&](int64_t d) { return d == steps; })) {
             return;
         }
@@ -208,10 +218,7 @@ void advance(StepContext& context, int64_t steps, int phases, double dt) {
         for (int w = 0; w < num_worlds; ++w) {
             needed = std::max(needed, context.pair_count[w]);
         }
-        context.grow_pairs(needed);
-        if (!(phases & BROAD_PHASE)) {  // a position phase whose relist outgrew the buffers:
-            phases = EVERY_PHASE;      // the step was put back to its start; it runs again whole
-        }
+        context.grow_pairs(needed);  // an overflowed step was abandoned: it runs again whole
     }
 }
 

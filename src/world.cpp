@@ -166,6 +166,8 @@ StepContext::StepContext(int num_worlds, Geometry geometry, std::vector<int32_t>
     pairs_of_.assign(b * n, 0);
     overlap_shift_.assign(b * n, {0.0, 0.0, 0.0});
     awake_pairs_.assign(b, 0);
+    stage_seconds.assign(b * STAGE_COUNT, 0.0);
+    stage_calls.assign(b * STAGE_COUNT, 0);
     partner_.assign(b * n, NONE);
     previous_partner_.assign(b * n, SEVERAL);
     snapshot_.assign(b * n * SNAPSHOT, 0.0);
@@ -249,6 +251,8 @@ WorldStep StepContext::world(int w) {
     s.rest = {world_rows(asleep, w, n),          &awake_pairs_[w],
               world_rows(partner_, w, n),        world_rows(previous_partner_, w, n),
               world_rows(snapshot_, w, n * SNAPSHOT), world_rows(rest_impulse_, w, n)};
+    s.timers = {world_rows(stage_seconds, w, STAGE_COUNT), world_rows(stage_calls, w, STAGE_COUNT),
+                timed};
     return s;
 }
 

@@ -16,6 +16,7 @@
 #include "broad_phase.h"
 #include "contact_set.h"
 #include "geometry.h"
+#include "timers.h"
 
 namespace rg {
 
@@ -115,6 +116,7 @@ struct WorldStep {
     Span<Vec3> overlap_shift;  // (n,) m, overlap.h's position corrections
     Graph graph;
     Rest rest;
+    StageTimers timers;      // the world's time per stage, filled by step_world
 
     int num_bodies() const { return static_cast<int>(bodies.position.size); }
     int64_t pair_capacity() const { return lists.pair_a.size; }
@@ -205,6 +207,10 @@ public:
     Array<int32_t> pair_a, pair_b;  // (B, P)
     Array<Vec3> pair_impulse;       // (B, P)
     Array<uint8_t> asleep;          // (B, n)
+    // Time per stage of every step so far (timers.h), per world: read by World.profile().
+    Array<double> stage_seconds;    // (B, STAGE_COUNT) s
+    Array<int64_t> stage_calls;     // (B, STAGE_COUNT)
+    bool timed = false;             // read the clock in every stage (timers.h)
 
 private:
     void allocate_pairs(int64_t capacity);

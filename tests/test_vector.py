@@ -16,20 +16,26 @@ TASK_IDS = [i for i in ENV_IDS if "Dense" not in i]
 
 
 @pytest.mark.parametrize("scene", [cube_stack(5), pile(30)], ids=["stack", "pile"])
-def test_one_kernel_call_equals_the_phase_by_phase_pipeline(scene):
-    """World.step(n) runs every phase of n steps in one kernel call; World(profile=True) runs
-    each phase as its own call and times it. Same arithmetic, so the same bits, batched or
-    not (a pile exercises pair-buffer growth, shock levels and side contacts)."""
+def test_timed_steps_in_chunks_equal_one_untimed_call(scene):
+    """World.step(n) runs n whole steps in one call of the core, which counts its stages and,
+    with profile=True, times them as it goes. Timing and splitting the steps into calls with
+    the profile read between them change nothing: the same bits, batched or not (a pile
+    exercises pair-buffer growth, relisting, shock levels and side contacts)."""
     for num_worlds in (None, 3):
         fused = rg.World(scene, dt=1 / 240, num_worlds=num_worlds)
-        phased = rg.World(scene, dt=1 / 240, num_worlds=num_worlds, profile=True)
+        timed = rg.World(scene, dt=1 / 240, num_worlds=num_worlds, profile=True)
         fused.step(150)
+        seconds = 0.0
         for _ in range(3):
-            phased.step(50)
+            timed.step(50)
+            total = sum(p["seconds"] for p in timed.profile().values())
+            assert total > seconds
+            seconds = total
         for name in ("position", "orientation", "velocity", "angular_velocity"):
-            np.testing.assert_array_equal(getattr(fused, name), getattr(phased, name))
-        assert phased.profile()["broad_phase"]["calls"] == 150
-        assert fused.profile()["broad_phase"]["calls"] == 0
+            np.testing.assert_array_equal(getattr(fused, name), getattr(timed, name))
+        assert fused.profile()["broad_phase"]["calls"] == 150 * (num_worlds or 1)
+        assert {n: p["calls"] for n, p in fused.profile().items()} == {
+            n: p["calls"] for n, p in timed.profile().items()}
 
 
 @pytest.mark.parametrize("env_id", TASK_IDS)

@@ -1,10 +1,13 @@
 """World: batching, determinism, kinematic and static bodies, setters and queries."""
 
+import time
+
 import numpy as np
 import pytest
 
 import rigid_gym as rg
 from rigid_gym.meshes import l_shape_mesh
+from rigid_gym.report.scenes import pile
 
 
 def mixed_scene():
@@ -137,27 +140,84 @@ def test_mesh_body_is_stored_at_its_centre_of_mass_in_its_principal_frame():
     np.testing.assert_allclose(body.body_from_shape.apply(props.center), 0.0, atol=1e-14)
 
 
-def test_profile_reports_phases():
-    """A box resting on the ground runs every phase its config switches on (for_scene leaves the
-    collision phase out: every restitution is 0); bodies in free flight, with no pair that
-    could touch, skip the impulse phases."""
+STAGES = ["broad_phase", "collision", "update_velocities", "contact", "shock_propagation",
+          "update_positions"]
+
+
+def test_profile_reports_every_stage_timed_inside_the_step():
+    """A box resting on the ground, kept awake, runs every stage its config switches on once
+    per step (for_scene leaves the collision stage out: every restitution is 0). The step
+    counts its stages always and times them while profiling: the times are positive, they
+    grow with every step, and together they fit inside the wall time of the step() calls; a
+    world stepped without profiling counts the same calls, has no time and the same state to
+    the bit."""
     scene = rg.Scene()
     scene.add_ground()
     scene.add_body(rg.Box((0.05, 0.05, 0.05)), mass=1.0, position=(0, 0, 0.05))
-    world = rg.World(scene, profile=True)
-    world.step(5)
-    profile = world.profile()
-    assert list(profile) == ["broad_phase", "collision", "update_velocities", "contact",
-                             "shock_propagation", "update_positions"]
-    assert not profile["collision"]["on"] and profile["collision"]["calls"] == 0
-    ran = [p for name, p in profile.items() if name != "collision"]
-    assert all(p["on"] and p["calls"] == 5 and p["seconds"] > 0 for p in ran)
+    config = rg.SolverConfig.for_scene(scene, sleep=False)
+    timed, plain = rg.World(scene, config=config, profile=True), rg.World(scene, config=config)
+    assert timed.profiling and not plain.profiling
+    start = time.perf_counter()
+    timed.step(5)
+    elapsed = time.perf_counter() - start
+    plain.step(5)
+    profile = timed.profile()
+    assert list(profile) == STAGES
+    assert not profile["collision"]["on"]
+    assert profile["collision"]["calls"] == 0 and profile["collision"]["seconds"] == 0.0
+    ran = [name for name in STAGES if name != "collision"]
+    assert all(profile[name]["on"] and profile[name]["calls"] == 5 for name in ran)
+    assert all(profile[name]["seconds"] > 0.0 for name in ran)
+    assert sum(p["seconds"] for p in profile.values()) <= elapsed
+    untimed = plain.profile()
+    assert [p["calls"] for p in untimed.values()] == [p["calls"] for p in profile.values()]
+    assert all(p["seconds"] == 0.0 for p in untimed.values())
+    for mine, theirs in zip(timed.state, plain.state):
+        np.testing.assert_array_equal(mine, theirs)
 
-    flying = rg.World(mixed_scene(), profile=True)
+    timed.step(3)
+    later = timed.profile()
+    assert all(later[name]["calls"] == 8 and later[name]["seconds"] > profile[name]["seconds"]
+               for name in ran)
+    timed.profiling = False
+    timed.step(2)
+    last = timed.profile()
+    assert all(last[name]["calls"] == 10 and last[name]["seconds"] == later[name]["seconds"]
+               for name in ran)
+    with pytest.raises(ValueError, match="World.profiling"):
+        timed.profiling = 1
+
+
+def test_profile_counts_skipped_and_repeated_stages():
+    """Bodies in free flight, with no pair that could touch, skip the impulse stages, and so
+    does a box asleep on the ground (its pair is not awake); in a falling pile the impulses of
+    some steps speed a body past its box, and those steps run the impulse stages again with
+    the pairs that adds (the broad phase and the position update run once per step). A batch
+    counts every world's stages."""
+    flying = rg.World(mixed_scene())
     flying.step(5)
     calls = {name: p["calls"] for name, p in flying.profile().items()}
-    assert calls["broad_phase"] == 5 and calls["update_positions"] == 5
-    assert calls["contact"] == 0 and calls["shock_propagation"] == 0
+    assert calls == {"broad_phase": 5, "collision": 0, "update_velocities": 5, "contact": 0,
+                     "shock_propagation": 0, "update_positions": 5}
+
+    scene = rg.Scene()
+    scene.add_ground()
+    scene.add_body(rg.Box((0.05, 0.05, 0.05)), mass=1.0, position=(0, 0, 0.05))
+    resting = rg.World(scene)
+    resting.step(5)
+    calls = {name: p["calls"] for name, p in resting.profile().items()}
+    assert resting.sleeping()[1] and calls["broad_phase"] == calls["update_positions"] == 5
+    assert 1 <= calls["contact"] == calls["shock_propagation"] < 5
+
+    single, batch = rg.World(pile(30)), rg.World(pile(30), num_worlds=3)
+    single.step(150)
+    batch.step(150)
+    calls = {name: p["calls"] for name, p in single.profile().items()}
+    assert calls["broad_phase"] == calls["update_positions"] == 150
+    assert calls["update_velocities"] > 150 and calls["contact"] > 150
+    assert calls["contact"] == calls["shock_propagation"] <= calls["update_velocities"]
+    assert {name: p["calls"] for name, p in batch.profile().items()} == {
+        name: 3 * count for name, count in calls.items()}
 
 
 def test_state_views_are_read_only():

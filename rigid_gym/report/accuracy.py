@@ -125,7 +125,7 @@ def phase_saving(case: Case, dt: float, repeats: int) -> dict:
     """What ``SolverConfig.for_scene`` left out of ``case`` and what that saved at ``dt``:
     {'left_out': [phase names], 'cost': s/s with for_scene, 'cost_all_on': s/s with every
     phase on (``SolverConfig()``), 'error', 'error_all_on': the first metric of each,
-    'profile': ``World.profile()`` of the for_scene world, run again phase by phase}."""
+    'profile': ``World.profile()`` of the for_scene world, run again with its stages timed}."""
     results = {}
     for name, config in (("for_scene", None), ("all_on", rg.SolverConfig())):
         world = world_for(case, dt, config=config)

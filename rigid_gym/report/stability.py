@@ -106,8 +106,8 @@ def energy_scale(world: rg.World) -> float:
 
 def simulate(world: rg.World, seconds: float, probes: int = PROBES) -> Run:
     """Step ``world`` for ``seconds`` (s), watching energy every step and overlap ``probes``
-    times, phase by phase so that ``world.profile()`` has each phase's share (the cost then
-    includes a kernel call per phase). Stops early (finite=False) if the state becomes
+    times, with its stages timed so that ``world.profile()`` has each phase's share (the cost
+    then includes a clock read per phase). Stops early (finite=False) if the state becomes
     non-finite."""
     world.profiling = True
     steps = round(seconds / world.dt)

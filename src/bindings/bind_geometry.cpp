@@ -50,13 +50,6 @@ void bind_geometry(nb::module_& m) {
     m.attr("PLANE") = static_cast<int>(PLANE);
     m.attr("CAPSULE_CORE_SAMPLES") = CAPSULE_CORE_SAMPLES;
     m.attr("TOUCHING_GAP") = CLOSED_GAP;
-    m.attr("BROAD_PHASE") = static_cast<int>(BROAD_PHASE);
-    m.attr("COLLISION_PHASE") = static_cast<int>(COLLISION_PHASE);
-    m.attr("VELOCITY_PHASE") = static_cast<int>(VELOCITY_PHASE);
-    m.attr("CONTACT_PHASE") = static_cast<int>(CONTACT_PHASE);
-    m.attr("SHOCK_PHASE") = static_cast<int>(SHOCK_PHASE);
-    m.attr("POSITION_PHASE") = static_cast<int>(POSITION_PHASE);
-    m.attr("EVERY_PHASE") = static_cast<int>(EVERY_PHASE);
     std::vector<double> corners;
     for (const Vec3& c : BOX_CORNERS) {
         corners.insert(corners.end(), {c.x, c.y, c.z});

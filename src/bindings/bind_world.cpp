@@ -103,6 +103,11 @@ void def_view(Context& cls, const char* name, Array<T> StepContext::*field,
 }  // namespace
 
 void bind_world(nb::module_& m) {
+    nb::list stages;
+    for (const char* name : STAGE_NAMES) {
+        stages.append(name);
+    }
+    m.attr("STAGES") = nb::tuple(stages);  // the step's stages in order (src/timers.h)
     Context cls(m, "StepContext",
                 "Every buffer the step reads and writes for a batch of worlds of one scene "
                 "(src/world.h). rigid_gym.World owns one; its state arrays are views of it.");
@@ -142,16 +147,16 @@ void bind_world(nb::module_& m) {
     def_view<double>(cls, "attach_offset_orientation", &StepContext::attach_offset_orientation, {4});
     cls.def(
         "step",
-        [](StepContext& c, int64_t steps, int phases, double dt) {
-            if (steps < 0 || phases <= 0 || phases > EVERY_PHASE || !(dt > 0.0)) {
-                throw nb::value_error("StepContext.step: steps >= 0, phases in [1, 63], dt > 0");
+        [](StepContext& c, int64_t steps, double dt) {
+            if (steps < 0 || !(dt > 0.0)) {
+                throw nb::value_error("StepContext.step: steps >= 0, dt > 0");
             }
             nb::gil_scoped_release unlocked;
-            advance(c, steps, phases, dt);
+            advance(c, steps, dt);
         },
-        nb::arg("steps"), nb::arg("phases"), nb::arg("dt"),
-        "Advance every world by `steps` steps of dt (s), running the phases whose bits are set "
-        "(src/step.h); the GIL is released meanwhile.");
+        nb::arg("steps"), nb::arg("dt"),
+        "Advance every world by `steps` steps of dt (s), counting (and, when timed, timing) "
+        "each stage (src/timers.h); the GIL is released meanwhile.");
     cls.def(
         "refresh",
         [](StepContext& c, int first, int last) {
@@ -209,6 +214,29 @@ void bind_world(nb::module_& m) {
         },
         nb::rv_policy::reference,
         "(B,) pairs the last step listed in each world; a copy.");
+    cls.def_rw("timed", &StepContext::timed,
+               "Read the clock in every stage of every step, for stage_seconds (src/timers.h).");
+    cls.def_prop_ro(
+        "stage_seconds",
+        [](StepContext& c) {
+            std::vector<double> seconds(c.stage_seconds.data(),
+                                        c.stage_seconds.data() + c.stage_seconds.size());
+            return hand_over(std::move(seconds), {static_cast<size_t>(c.num_worlds()),
+                                                  static_cast<size_t>(STAGE_COUNT)});
+        },
+        nb::rv_policy::reference,
+        "(B, len(STAGES)) s each world spent in each stage of its steps so far, while timed; "
+        "a copy.");
+    cls.def_prop_ro(
+        "stage_calls",
+        [](StepContext& c) {
+            std::vector<int64_t> calls(c.stage_calls.data(),
+                                       c.stage_calls.data() + c.stage_calls.size());
+            return hand_over(std::move(calls), {static_cast<size_t>(c.num_worlds()),
+                                                static_cast<size_t>(STAGE_COUNT)});
+        },
+        nb::rv_policy::reference,
+        "(B, len(STAGES)) how many times each world ran each stage so far; a copy.");
     cls.def_prop_ro(
         "asleep",
         [](StepContext& c) {
