@@ -43,6 +43,7 @@ import importlib.util
 import os
 import platform
 import statistics
+import sys
 import time
 from pathlib import Path
 
@@ -331,12 +332,41 @@ def main() -> None:
     parser.add_argument("--only", choices=["solver", "envs", "batched"])
     parser.add_argument("--quick", action="store_true", help="small counts: a smoke run")
     parser.add_argument("--repeats", type=int, default=5, help="timings per median")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="also write the tables to this markdown file (README quotes "
+                             "docs/benchmarks.md, written by a whole run)")
     args = parser.parse_args()
-    print(machine_line(), flush=True)
-    sections = {"solver": solver_section, "envs": envs_section, "batched": batched_section}
-    for name, section in sections.items():
-        if args.only in (None, name):
-            section(args.quick, args.repeats)
+    out = open(args.out, "w") if args.out else None  # noqa: SIM115  (closed below)
+    if out is not None:
+        command = " ".join(["python benchmarks/speed.py", *sys.argv[1:]])
+        out.write(f"# Speed\n\nWritten by `{command}`; README quotes this run.\n\n")
+        sys.stdout = Tee(sys.stdout, out)
+    try:
+        print(machine_line(), flush=True)
+        sections = {"solver": solver_section, "envs": envs_section, "batched": batched_section}
+        for name, section in sections.items():
+            if args.only in (None, name):
+                section(args.quick, args.repeats)
+    finally:
+        if out is not None:
+            sys.stdout = sys.__stdout__
+            out.close()
+
+
+class Tee:
+    """A text stream that writes to several: the terminal and the markdown file."""
+
+    def __init__(self, *streams):
+        self.streams = streams
+
+    def write(self, text: str) -> int:
+        for stream in self.streams:
+            stream.write(text)
+        return len(text)
+
+    def flush(self) -> None:
+        for stream in self.streams:
+            stream.flush()
 
 
 if __name__ == "__main__":
