@@ -13,8 +13,8 @@
 // with D_i = lookahead_i + dt V_i the predicted displacement of body i's centre, Theta_i =
 // dt omega_i its predicted turn, r_i the contact's lever from that centre and n the normal (B
 // to A). A contact takes part in a pass while its depth is above the pass's threshold (0 for
-// impulses, -GRAPH_MARGIN for shock propagation's graph and supports), as a contact the narrow
-// phase found there would. Points, normals and levers stay as found: within the margin the
+// impulses, -GRAPH_MARGIN for shock propagation's supports, more for its graph), as a
+// contact the narrow phase found there would. Points, normals and levers stay as found: within the margin the
 // bodies' turns move them by less than a margin times the turn. When a pair's bodies have
 // moved further than the margin allows since its detection (a collision reversed a body, a
 // stack above pushed harder), the pair is detected again at the current prediction before the
@@ -35,11 +35,10 @@ namespace rg {
 // m: contacts this far apart at the predicted poses are found and kept, inactive.
 constexpr double SPECULATIVE_MARGIN = 2e-3;
 
-// Bodies closer than this (m) at the predicted poses count as touching in shock propagation:
-// in the contact graph (bodies falling together touch without overlapping, yet the upper one
-// rests on the lower) and in a body's patches against its frozen supports (a rocking box's
-// lifting corners belong to the face it rests on; the patch wrench decides whether the patch
-// holds, j_n > 0, or separates).
+// Contacts closer than this (m) at the predicted poses count as touching in shock
+// propagation's patches against a body's frozen supports (a rocking box's lifting corners
+// belong to the face it rests on; the patch wrench decides whether the patch holds, j_n > 0);
+// its graph orders the pairs within a wider reach (shock.cpp).
 constexpr double GRAPH_MARGIN = 1e-4;
 
 // Find every listed pair's contacts at the predicted poses (displacement lookahead + dt V for

@@ -394,7 +394,7 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
                           Movable movable, const ContactSet& set, int64_t seed, int64_t count,
                           double e, double mu, Vec3 prior, double dt) {
     const PatchResult unresolved = {UNRESOLVED, {0.0, 0.0, 0.0}};
-    const PatchResult separating = {SEPARATING, {0.0, 0.0, 0.0}};
+    const PatchResult at_rest = {AT_REST, {0.0, 0.0, 0.0}};
     // geometric centroid and mean normal of the patch
     Vec3 c = {0.0, 0.0, 0.0}, n = {0.0, 0.0, 0.0};
     int m = 0;
@@ -438,7 +438,7 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
     const double spin_speed = rho * std::max(std::max(std::fabs(w.x), std::fabs(w.y)), std::fabs(w.z));
     if (std::max(std::max(std::max(std::fabs(v.x), std::fabs(v.y)), std::fabs(v.z)), spin_speed) <
         REST_SPEED) {
-        return separating;  // at rest: nothing to do
+        return at_rest;  // nothing to do
     }
     Matrix6 big = {};
     if (movable.a) {
@@ -466,7 +466,7 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
             const Vec3 mo = moment(d, sol, 3, tips + 1);
             const double mn = mo.x * n.x + mo.y * n.y + mo.z * n.z;
             if (jn <= 0.0) {
-                return separating;
+                return unresolved;
             }
             // Coulomb on the step's total through this patch
             const Vec3 f = add(prior, j);
@@ -507,7 +507,7 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
         return unresolved;
     }
     if (jn <= 0.0) {
-        return separating;
+        return unresolved;
     }
     const double fn = jn + prior.x * n.x + prior.y * n.y + prior.z * n.z;
     if (!pressure_inside(set, seed, count, c, n, mo, fn)) {

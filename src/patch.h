@@ -55,7 +55,7 @@ inline bool closable(double gap, const BodyModel& model, double dt) {
     return gap > CLOSED_GAP && gap <= dt * dt * std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z);
 }
 
-enum PatchOutcome { APPLIED, SEPARATING, UNRESOLVED };
+enum PatchOutcome { APPLIED, AT_REST, UNRESOLVED };
 
 struct PatchResult {
     PatchOutcome outcome;
@@ -71,10 +71,11 @@ struct Movable {
 // Apply the patch wrench of the header to the pair (a, b) for the patch whose contacts have
 // group == seed. prior: the impulse the patch's pairs already transmitted to a this step
 // (N s); the static wrench must keep prior + j inside the friction cone. Outcomes: APPLIED;
-// SEPARATING when holding the patch would need a pulling impulse (j_n <= 0), or when it is at
-// rest (its points' relative speeds below REST_SPEED): nothing to do; or UNRESOLVED (nothing
-// applied) for a single point or a body tipping over an edge, which the caller treats with a
-// single impulse.
+// AT_REST when the patch is at rest (its points' relative speeds below REST_SPEED):
+// nothing to do; or UNRESOLVED (nothing applied) for a single point, a body tipping over an
+// edge, or a patch that holding would pull (j_n <= 0: a tumbling box whose edge strikes with
+// one end while the other lifts), which the caller treats with a single impulse on the
+// approaching points (none approaching: nothing to do).
 PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int a, int b,
                           Movable movable, const ContactSet& set, int64_t seed, int64_t count,
                           double e, double mu, Vec3 prior, double dt);

@@ -186,8 +186,9 @@ int resolve_pair(WorldStep& w, int64_t k, int a, int b, double dt, Vec3 lookahea
 // face resting on a face is one patch). Against an immovable partner (static, kinematic, or
 // frozen by shock propagation) in the contact and shock stages, a face or edge patch gets the
 // wrench of patch.h over all its touching points: it brings the patch exactly to rest or to
-// sliding without rocking, or does nothing when the patch is separating. Otherwise
-// (collisions, two movable bodies, single points, a body tipping over an edge) the patch's
+// sliding without rocking, or does nothing when the patch is at rest. Otherwise
+// (collisions, two movable bodies, single points, a body tipping over an edge, a patch that
+// holding would pull because one end of it lifts) the patch's
 // approaching points get one impulse (impulse.h) at their centroid, weighted by approach
 // speed, along their mean normal, plus torsional friction about the normal bounded by
 // mu j_n r (r: the points' mean distance from the centroid). One impulse per patch, not one
@@ -237,7 +238,7 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
                 applied += 1;
                 continue;
             }
-            if (result.outcome == SEPARATING) {
+            if (result.outcome == AT_REST) {
                 continue;
             }
         }
