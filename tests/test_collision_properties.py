@@ -209,11 +209,16 @@ def check_contacts(shape_a, shape_b, qa, qb, u, gap, origin):
 @settings(max_examples=60, deadline=None)
 @given(shape=shapes, q=unit_quaternions, sink=st.floats(-0.05, 0.1),
        origin=st.tuples(st.floats(-2, 2), st.floats(-2, 2)))
+@example(shape=rg.Sphere(0.5), q=np.array([1.0, 0.0, 0.0, 0.0]), sink=-1.19e-7,
+         origin=(0.0, 0.0))  # within the touching gap
+@example(shape=rg.Box((0.1, 0.2, 0.3)), q=np.array([1.0, 0.0, 0.0, 0.0]), sink=-2e-6,
+         origin=(0.0, 0.0))  # just beyond it
 def test_random_shapes_on_the_ground(shape, q, sink, origin):
     """A shape turned at random, its lowest point ``sink`` m below the ground (above it when
     negative): the deepest contact is exactly that deep (every type is exact against a plane:
     vertices and core ends are its extremes), normals are +z, points are the shape's points
-    below the ground, and nothing is reported above it."""
+    below the ground, and nothing is reported further above it than TOUCHING_GAP, within
+    which a resting body counts as touching."""
     r = quat.to_matrix(q)
     z = support(shape, r, np.array([0.0, 0.0, -1.0])) - sink
     scene = rg.Scene()
@@ -221,8 +226,11 @@ def test_random_shapes_on_the_ground(shape, q, sink, origin):
     scene.add_body(shape, mass=1.0, position=(origin[0], origin[1], z), orientation=q)
     world = rg.World(scene)
     c = world.contacts()
-    if sink <= 1e-9:  # above the ground, or touching it within rounding
-        assert len(c.depth) == 0 or sink > -1e-9
+    if sink < -TOUCHING_GAP - 1e-9:  # apart by more than the touching gap
+        assert len(c.depth) == 0
+        return
+    if sink <= 1e-9:  # touching within the gap (or rounding): reported, then as deep as it is
+        assert len(c.depth) == 0 or abs(c.depth.max() - sink) <= 1e-9
         return
     assert len(c.depth) >= 1
     np.testing.assert_allclose(c.depth[0], sink, atol=1e-9)
