@@ -241,11 +241,74 @@ void apply_wrench(const BodyStates& bodies, const BodyModel& model, int i, doubl
 // motion gives over the patch, v_n(c + u t1 + v t2) = a + v Omega.t1 - u Omega.t2 (a face;
 // an edge along `edge`: a - s Omega.(n x edge)), by least squares; exact for a flat face over
 // a flat support, whose gaps are affine in the same way.
+// The pair as the patch's impulses see it: which bodies move and where their levers start.
+struct PairLevers {
+    const BodyStates& bodies;
+    const BodyModel& model;
+    int a, b;
+    Movable movable;
+    Vec3 centre_a, centre_b;
+};
+
+// n . (relative velocity change at q per unit impulse n at p): GBF's K_qp, along n.
+double normal_coupling(const PairLevers& pair, Vec3 n, Vec3 q, Vec3 p) {
+    double k = 0.0;
+    if (pair.movable.a) {
+        const Vec3 rp = sub(p, pair.centre_a), rq = sub(q, pair.centre_a);
+        k += pair.model.inverse_mass[pair.a] +
+             dot(rotate(pair.bodies.inverse_inertia[pair.a], cross(rp, n)), cross(rq, n));
+    }
+    if (pair.movable.b) {
+        const Vec3 rp = sub(p, pair.centre_b), rq = sub(q, pair.centre_b);
+        k += pair.model.inverse_mass[pair.b] +
+             dot(rotate(pair.bodies.inverse_inertia[pair.b], cross(rp, n)), cross(rq, n));
+    }
+    return k;
+}
+
+// Each point's reach (closable, patch.h). A patch held at its closest point p pivots about it:
+// falling at g, the impulse that stops p changes the normal velocity at q by K_qp / K_pp of
+// p's, so q falls at (1 - K_qp / K_pp) g. The far end of a thin rod tipping about the other
+// falls at 1.5 g and, with gravity's reach alone, would hang 1 to 1.5 |g| dt^2 above its
+// support for good. Points nearer the pivot than the centre of mass keep gravity's reach.
+struct LeverReach {
+    double base;  // closing_reach, m
+    Vec3 pivot;
+    double k_pivot;
+};
+
+LeverReach lever_reach(const PairLevers& pair, const ContactSet& set, int64_t seed, int64_t count,
+                       Vec3 n, double dt) {
+    int64_t closest = seed;
+    for (int64_t i = seed; i < count; ++i) {
+        if (set.group[i] == seed && set.gap[i] < set.gap[closest]) {
+            closest = i;
+        }
+    }
+    const Vec3 p = set.point[closest];
+    const double reach = closing_reach(pair.model, dt);
+    if (-set.depth[closest] > reach / dt + REST_SPEED) {
+        return {reach, p, 0.0};  // the pivot strikes: no body held at rest by it
+    }
+    return {reach, p, normal_coupling(pair, n, p, p)};
+}
+
+double point_reach(const PairLevers& pair, const LeverReach& lever, Vec3 n, Vec3 q) {
+    if (lever.k_pivot <= 0.0) {
+        return lever.base;
+    }
+    const double faster = 1.0 - normal_coupling(pair, n, q, lever.pivot) / lever.k_pivot;
+    return lever.base * std::max(1.0, faster);
+}
+
 // Contact i's target normal velocity t_i (normal_targets below).
-double point_target(const BodyModel& model, const ContactSet& set, int64_t i, double e, double dt) {
+double point_target(const PairLevers& pair, const LeverReach& lever, const ContactSet& set,
+                    int64_t i, Vec3 n, double e, double dt) {
     const double v = set.depth[i];
     const double target = -e * v;
-    return closable(set.gap[i], model, dt) ? std::max(v, std::min(target, -set.gap[i] / dt)) : target;
+    return closable(set.gap[i], point_reach(pair, lever, n, set.point[i]))
+               ? std::max(v, std::min(target, -set.gap[i] / dt))
+               : target;
 }
 
 struct Targets {
@@ -253,13 +316,14 @@ struct Targets {
     double tip[2];
 };
 
-Targets normal_targets(const BodyModel& model, const ContactSet& set, int64_t seed, int64_t count,
-                       Vec3 c, Vec3 t1, Vec3 t2, Vec3 edge, int tips, const Vec3* d, double vn,
-                       Vec3 w, double e, double dt) {
+Targets normal_targets(const PairLevers& pair, const LeverReach& lever, const ContactSet& set,
+                       int64_t seed, int64_t count, Vec3 c, Vec3 n, Vec3 t1, Vec3 t2, Vec3 edge,
+                       int tips, const Vec3* d, double vn, Vec3 w, double e, double dt) {
     Targets out = {-e * vn, {-e * dot(w, d[0]), tips > 1 ? -e * dot(w, d[1]) : 0.0}};
     bool closing = false;
     for (int64_t i = seed; i < count; ++i) {
-        closing = closing || (set.group[i] == seed && closable(set.gap[i], model, dt));
+        closing = closing || (set.group[i] == seed &&
+                              closable(set.gap[i], point_reach(pair, lever, n, set.point[i])));
     }
     if (!closing) {
         return out;
@@ -270,7 +334,7 @@ Targets normal_targets(const BodyModel& model, const ContactSet& set, int64_t se
         if (set.group[i] != seed) {
             continue;
         }
-        const double target = point_target(model, set, i, e, dt);
+        const double target = point_target(pair, lever, set, i, n, e, dt);
         const Vec3 q = sub(set.point[i], c);
         const double u = tips > 1 ? dot(q, t1) : dot(q, edge), v = tips > 1 ? dot(q, t2) : 0.0;
         mean += target;
@@ -301,7 +365,7 @@ Targets normal_targets(const BodyModel& model, const ContactSet& set, int64_t se
         const Vec3 q = sub(set.point[i], c);
         const double fitted = a + slope_u * (tips > 1 ? dot(q, t1) : dot(q, edge)) +
                               slope_v * (tips > 1 ? dot(q, t2) : 0.0);
-        if (fitted < point_target(model, set, i, e, dt) - REST_SPEED) {
+        if (fitted < point_target(pair, lever, set, i, n, e, dt) - REST_SPEED) {
             return out;
         }
     }
@@ -440,6 +504,20 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
         REST_SPEED) {
         return at_rest;  // nothing to do
     }
+    // every point approaching no faster than its target (a rod's end closing its gap while the
+    // other end rests): nothing to do. Solved, the wrench would be j_n <= 0, and the fallback
+    // impulse would stop the closing point short.
+    const PairLevers pair = {bodies, model, a, b, movable, set.centre_a[seed], set.centre_b[seed]};
+    const LeverReach lever = lever_reach(pair, set, seed, count, n, dt);
+    bool short_of_target = false;
+    for (int64_t i = seed; i < count; ++i) {
+        short_of_target = short_of_target ||
+                          (set.group[i] == seed &&
+                           set.depth[i] < point_target(pair, lever, set, i, n, e, dt) - REST_SPEED);
+    }
+    if (!short_of_target) {
+        return at_rest;
+    }
     Matrix6 big = {};
     if (movable.a) {
         add_body_wrench_matrix(model.inverse_mass[a], bodies.inverse_inertia[a], ra, big);
@@ -447,7 +525,8 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
     if (movable.b) {
         add_body_wrench_matrix(model.inverse_mass[b], bodies.inverse_inertia[b], rb, big);
     }
-    const Targets target = normal_targets(model, set, seed, count, c, t1, t2, edge, tips, d, vn, w, e, dt);
+    const Targets target =
+        normal_targets(pair, lever, set, seed, count, c, n, t1, t2, edge, tips, d, vn, w, e, dt);
     Matrix6 system;
     double rhs[6], sol[6];
     if (mu > 0.0) {

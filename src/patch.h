@@ -43,16 +43,22 @@ constexpr double REST_SPEED = 1e-9;
 // it was.
 constexpr double CLOSED_GAP = 1e-6;
 
-// May a contact point apart by `gap` (m) at the start of the step keep approaching until it
-// closes the gap within the step (speculative contact, patch.cpp and solver.cpp)? Only gaps
-// up to what gravity closes in one step, |g| dt^2: an impulse at e = 0 stops a body up to that
-// far short of its support, where it would otherwise hang (GBF's contact stage judges
-// predicted poses). Larger gaps, left by fast impacts, close under gravity in later steps:
-// closing them at once in a pile drove bodies deeper into each other (the linearised gap of
-// a fast, turning body is least exact).
-inline bool closable(double gap, const BodyModel& model, double dt) {
+// m: how far apart a contact point may be at the start of the step and still keep approaching
+// until it closes the gap within the step (speculative contact, patch.cpp and solver.cpp):
+// what gravity closes in one step, |g| dt^2. An impulse at e = 0 stops a body up to that far
+// short of its support, where it would otherwise hang (GBF's contact stage judges predicted
+// poses). Larger gaps, left by fast impacts, close under gravity in later steps: closing them
+// at once in a pile drove bodies deeper into each other (the linearised gap of a fast, turning
+// body is least exact). A point of a patch pivoting about its closest point falls faster
+// than g and gets a longer reach (lever_reach in patch.cpp).
+inline double closing_reach(const BodyModel& model, double dt) {
     const Vec3 g = model.gravity;
-    return gap > CLOSED_GAP && gap <= dt * dt * std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z);
+    return dt * dt * std::sqrt(g.x * g.x + g.y * g.y + g.z * g.z);
+}
+
+// May a point apart by `gap` (m) close it within the step, given its reach (m)?
+inline bool closable(double gap, double reach) {
+    return gap > CLOSED_GAP && gap <= reach;
 }
 
 enum PatchOutcome { APPLIED, AT_REST, UNRESOLVED };

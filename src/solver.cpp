@@ -131,7 +131,7 @@ double closing_restitution(const BodyModel& model, const ContactSet& set, int64_
         return 0.0;
     }
     const double reached = -gap / (dt * fastest);
-    return reached <= -1.0 || closable(gap, model, dt) ? reached : 0.0;
+    return reached <= -1.0 || closable(gap, closing_reach(model, dt)) ? reached : 0.0;
 }
 
 // COLLISION: the pair's max(e_a, e_b); CONTACT: the ramp value; SHOCK: 0.
