@@ -60,7 +60,8 @@ HYPERPARAMS = Path(__file__).with_name("hyperparams.yml")
 RESULT_KEYS = ("env_id", "algo", "seed", "env_steps", "wall_s", "cpu_s", "episodes", "success",
                "selected_env_steps", "curve", "learner", "method", "demo_env_steps", "machine")
 """A result file's keys: env_id, algo, seed; env_steps (training, without the
-demonstrations'), wall_s and cpu_s (the run's, evaluations included, over all its sittings);
+demonstrations'), wall_s and cpu_s (the run's, making its demonstrations and evaluations
+included, over all its sittings);
 episodes and success (the final evaluation: deterministic policy, fraction of successes);
 selected_env_steps (the env steps of the checkpoint whose policy the final evaluation ran,
 ``finish``); curve [{"env_steps", "wall_s", "success"}] (the evaluations during training, then
@@ -201,6 +202,9 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
         learner, n_envs = record.get("learner", "sb3"), record["n_envs"]
     note(f"{env_id}: making {n_envs} env(s) and the {algo} model on {learner} (run folder "
          f"{folder})", progress)
+    before = record if resume is not None else {}  # the seconds of the parts before a resume
+    # from here: making the model and the demonstrations count in the run's time
+    clock = Clock(before.get("wall_seconds", 0.0), before.get("cpu_seconds", 0.0))
     if resume is not None:  # the checkpoint's model, with the settings it was made with
         env = make_env(env_id, n_envs, record.get("env_kwargs"))
         env.seed(seed)  # the envs start afresh, as at the run's start
@@ -219,8 +223,6 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
         _write_run(folder, env_id, algo, learner, seed, timesteps, n_envs,
                    model_kwargs(settings, algo, overrides), demo, settings.get("env_kwargs", {}))
 
-    before = record if resume is not None else {}  # the seconds of the parts before a resume
-    clock = Clock(before.get("wall_seconds", 0.0), before.get("cpu_seconds", 0.0))
     callbacks: list[BaseCallback] = []
     if eval_freq:
         callbacks.append(SuccessEvaluation(env_id, folder / "evaluations.csv", eval_freq,
