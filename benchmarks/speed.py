@@ -1,11 +1,13 @@
 """Speed against the bar of the speed issue: solver steps/s, env steps/s, batched env steps/s.
 
 1. Solver (``--only solver``): steps/s at dt = 1/240, one world, for the scenes of
-   ``rigid_gym.report.scenes``: the 10-cube stack, the 55-box pyramid and piles of 10, 100 and
-   1000 mixed bodies. Every engine (ours, and MuJoCo and PyBullet through
-   ``rigid_gym.report.peers`` when the ``compare`` extra is installed: ``pip install -e
-   ".[compare]"``) builds every scene and runs ``settle`` steps; then each of ``--repeats``
-   rounds times ``step(steps)`` of every scene and engine in turn. A rate is the median over
+   ``rigid_gym.report.scenes``: settled, the 10-cube stack, the 55-box pyramid and piles of
+   10, 100 and 1000 mixed bodies; falling, the piles of 10 and 100 in the first second after
+   their drop. Every engine (ours, and MuJoCo without and with its island sleeping and
+   PyBullet through ``rigid_gym.report.peers`` when the ``compare`` extra is installed: ``pip
+   install -e ".[compare]"``) builds every scene and runs a settled scene's ``settle`` steps;
+   then each of ``--repeats`` rounds times ``step(steps)`` of every scene and engine in turn,
+   a falling scene's after a reset to its start. A rate is the median over
    the rounds, a ratio the median of the rounds' ratios, k the median of the rounds' k: what
    is compared was timed within one round, so the VM's drift in speed moves both sides.
    Every engine gets the same step counts, so all are timed over the same stretch of
@@ -61,8 +63,11 @@ DT = 1 / 240
 STACK_SECONDS = 10.0
 """Simulated time over which the stack's top cube is watched, s."""
 STACK_BAR_MM = 1.0
-PEERS = {"MuJoCo": ("mujoco", peers.MuJoCoWorld), "PyBullet": ("pybullet", peers.PyBulletWorld)}
-"""Peer label -> (module name as in ``peers.available``, world class (scene, dt))."""
+PEERS = {"MuJoCo": ("mujoco", peers.MuJoCoWorld),
+         "MuJoCo, sleep on": ("mujoco", functools.partial(peers.MuJoCoWorld, sleep=True)),
+         "PyBullet": ("pybullet", peers.PyBulletWorld)}
+"""Peer label -> (module name as in ``peers.available``, world class (scene, dt)). MuJoCo
+sleeps resting islands only with ``mjENBL_SLEEP`` on, which a user turns on for speed."""
 ENGINES = ("ours", *PEERS)
 BATCH_SIZES = (1, 16, 256, 1024)
 QUICK_BATCH_SIZES = (1, 16)
@@ -112,15 +117,22 @@ def machine_line() -> str:
 
 # -- solver ----------------------------------------------------------------------------------
 
+FALLING = ", falling"
+"""The name's ending of a scene timed from its start (settle = 0), reset before each timing."""
+
+
 def solver_scenes(quick: bool) -> list[tuple[str, rg.Scene, int, int]]:
-    """(name, scene, settle steps, timed steps per repeat) for each scene. The piles settle
-    equally long, so their growth with N compares piles in the same state."""
+    """(name, scene, settle steps, timed steps per repeat) for each scene: settled ones after
+    ``settle`` steps, falling ones (settle 0, the name ending in FALLING) over the first
+    ``steps`` after the drop. The piles settle equally long, so their growth with N compares
+    piles in the same state."""
     if quick:
         return [("10-cube stack", cube_stack(10), 240, 60), ("pile of 10", pile(10), 120, 60),
-                ("pile of 100", pile(100), 120, 8)]
+                ("pile of 100", pile(100), 120, 8), ("pile of 10" + FALLING, pile(10), 0, 60)]
     return [("10-cube stack", cube_stack(10), 240, 240), ("55-box pyramid", pyramid(10), 240, 120),
             ("pile of 10", pile(10), 240, 240), ("pile of 100", pile(100), 240, 48),
-            ("pile of 1000", pile(1000), 240, 4)]
+            ("pile of 1000", pile(1000), 240, 4), ("pile of 10" + FALLING, pile(10), 0, 240),
+            ("pile of 100" + FALLING, pile(100), 0, 240)]
 
 
 def dynamic_bodies(scene: rg.Scene) -> int:
@@ -152,8 +164,11 @@ def rate_text(rate: float) -> str:
     return f"{rate:,.0f}" if rate >= 100 else f"{rate:.3g}"
 
 
-def stepping_rate(world, steps: int) -> float:
-    """Steps/s of one ``world.step(steps)``."""
+def stepping_rate(world, steps: int, from_start: bool = False) -> float:
+    """Steps/s of one ``world.step(steps)``; from_start: of the first ``steps`` after a reset
+    to the scene's start (the reset not timed)."""
+    if from_start:
+        world.reset()
     start = time.perf_counter()
     world.step(steps)
     return steps / (time.perf_counter() - start)
@@ -172,7 +187,8 @@ def timed_rates(scenes, repeats: int) -> tuple[dict, dict]:
             world = worlds[name, engine] = build(engine, scene)
             if not isinstance(world, str):
                 world.step(settle)
-                runs[name, engine] = functools.partial(stepping_rate, world, steps)
+                runs[name, engine] = functools.partial(stepping_rate, world, steps,
+                                                       name.endswith(FALLING))
     rates = ENV_BENCHMARK.rates_in_rounds(runs, repeats)
     rates.update({key: world for key, world in worlds.items() if isinstance(world, str)})
     moved = {}
@@ -225,7 +241,7 @@ def growth_exponent(counts, microseconds) -> float:
 
 def print_pile_growth(rates: dict, scenes) -> None:
     piles = [(name, dynamic_bodies(scene)) for name, scene, _, _ in scenes
-             if name.startswith("pile")]
+             if name.startswith("pile") and not name.endswith(FALLING)]
     counts = np.array([n for _, n in piles], dtype=float)
     print(f"\nPiles: cost per step and per body-step (us, medians), and k of cost ~ N^k between "
           f"N = {counts[-2]:.0f} and {counts[-1]:.0f} (the median of each repeat's k)\n")

@@ -123,6 +123,27 @@ def test_mujoco_adapter_runs_the_same_case_code():
         peers.MuJoCoWorld(case.build(), 0.0)
 
 
+def test_mujoco_with_sleep_on_freezes_a_settled_stack_and_wakes_on_reset():
+    """With mjENBL_SLEEP the settled 10-stack's island sleeps: its poses stop changing at all,
+    where MuJoCo without sleeping still moves them by round-off each step; a reset puts the
+    scene back at its start (the speed benchmark times falling scenes from their reset)."""
+    mujoco = pytest.importorskip("mujoco")
+    if not hasattr(mujoco.mjtEnableBit, "mjENBL_SLEEP"):
+        pytest.skip("this MuJoCo has no island sleeping")
+    moved = {}
+    for sleep in (False, True):
+        world = peers.MuJoCoWorld(scenes.cube_stack(10), 1 / 240, sleep=sleep)
+        world.step(480)
+        before = world.position.copy()
+        world.step(240)
+        moved[sleep] = float(np.abs(world.position - before).max())
+    assert moved[True] == 0.0 < moved[False]
+    world.reset()
+    assert world.steps == 0
+    np.testing.assert_allclose(world.position, [b.position for b in world.scene.bodies],
+                               atol=1e-12)
+
+
 def test_restitution_maps_to_the_damping_ratio_of_a_spring_damper():
     """A linear spring-damper of damping ratio zeta rebounds at exp(-zeta pi / sqrt(1 -
     zeta^2)) times its approach speed: the mapping inverts that."""

@@ -280,16 +280,24 @@ class MuJoCoWorld(PeerWorld):
     """A rigid_gym Scene simulated by MuJoCo (``mujoco.mj_step`` in a Python loop) with a
     fixed step ``dt`` (s) and ``integrator`` "Euler" (MuJoCo's default, semi-implicit) or
     "RK4". The model is :func:`mjcf` of the scene; the state is read from qpos/qvel (the
-    body poses MuJoCo caches in ``data.xpos`` lag one step behind after ``mj_step``)."""
+    body poses MuJoCo caches in ``data.xpos`` lag one step behind after ``mj_step``).
+    ``sleep``: switch on MuJoCo's island sleeping (``mjENBL_SLEEP``, MuJoCo 4.0 on; its own
+    velocity threshold and delay), which a MuJoCo without it refuses with a ValueError."""
 
     engine = "MuJoCoWorld"
 
-    def __init__(self, scene: rg.Scene, dt: float, integrator: str = "Euler"):
+    def __init__(self, scene: rg.Scene, dt: float, integrator: str = "Euler",
+                 sleep: bool = False):
         import mujoco
 
         super().__init__(scene, dt)
         self.mj = mujoco
         self.model = mujoco.MjModel.from_xml_string(mjcf(scene, self.dt, integrator))
+        if sleep:
+            if not hasattr(mujoco.mjtEnableBit, "mjENBL_SLEEP"):
+                raise ValueError(f"MuJoCoWorld: sleep needs MuJoCo 4.0 or later, this is "
+                                 f"{mujoco.__version__}")
+            self.model.opt.enableflags |= mujoco.mjtEnableBit.mjENBL_SLEEP
         self.data = mujoco.MjData(self.model)
         body_ids = [mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, f"b{k}")
                     for k in range(len(scene.bodies))]
