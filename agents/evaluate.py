@@ -6,6 +6,7 @@
     rigid-gym evaluate runs/Push-sac-seed0/model.zip --episodes 100
     rigid-gym evaluate agents/models/stack_bcsac_seed0.zip --episodes 100
     python -m rigid_gym.agents.evaluate      # re-evaluate the committed models, write their figures
+    python -m rigid_gym.agents.evaluate --commit runs/Stack-bc_sac-seed0 stack_bcsac_seed0
 
 The env id and algorithm come from the model's settings file, or are given: ``run.json`` in
 the folder of a run's ``model.zip`` (``rigid-gym train`` writes it), or ``<name>.json``
@@ -125,8 +126,47 @@ def record_evaluation(model_path: str | Path, episodes: int = 100) -> dict:
     return meta["evaluation"]
 
 
+def commit_model(run: str | Path, name: str, episodes: int = 100) -> dict:
+    """Put a finished run's policy into agents/models as ``name``.zip with ``name``.json: its
+    ``selected_model.zip`` (``train.finish``'s choice, else ``model.zip``) saved without what
+    only training needs (the optimizers' state, and SBX's module objects, which its loading
+    rebuilds from the policy: a BC-SAC model goes from 3.8 to 0.8 MB, acting the same), its
+    run.json with the command that made it, then ``record_evaluation`` over ``episodes``
+    episodes. Returns the evaluation."""
+    run = Path(run)
+    meta = json.loads((run / "run.json").read_text())
+    source = run / "selected_model.zip"
+    source = source if source.is_file() else run / "model.zip"
+    model = load_model(source, gym.make(meta["env_id"]), meta.get("algo"))
+    for part in ("actor_state", "qf_state"):  # SBX: flax train states
+        state = getattr(model.policy, part, None)
+        if state is not None:
+            setattr(model.policy, part, state.replace(opt_state=None))
+    optimizers = [getattr(model.policy, part, None) for part in ("actor", "critic")]
+    for optimizer in (getattr(o, "optimizer", None) for o in optimizers):  # PyTorch SB3
+        if optimizer is not None:
+            optimizer.state.clear()
+    model.save(MODELS / f"{name}.zip", exclude=["actor", "qf"] if meta.get("learner") == "sbx"
+               else None)
+    result = run / "result.json"
+    if result.is_file():
+        meta["selected_env_steps"] = json.loads(result.read_text())["selected_env_steps"]
+    meta["source"] = str(source)
+    (MODELS / f"{name}.json").write_text(json.dumps(meta, indent=2) + "\n")
+    return record_evaluation(MODELS / f"{name}.zip", episodes)
+
+
 if __name__ == "__main__":
-    for path in sorted(MODELS.glob("*.zip")):
-        figures = record_evaluation(path)
+    import argparse
+
+    parser = argparse.ArgumentParser(description="Re-evaluate the committed models and write "
+                                     "their figures, or commit a run's policy as one")
+    parser.add_argument("--commit", nargs=2, metavar=("RUN_FOLDER", "NAME"),
+                        help="put RUN_FOLDER's policy into agents/models as NAME (commit_model)")
+    args = parser.parse_args()
+    paths = [MODELS / f"{args.commit[1]}.zip"] if args.commit else sorted(MODELS.glob("*.zip"))
+    for path in paths:
+        figures = commit_model(args.commit[0], args.commit[1]) if args.commit else \
+            record_evaluation(path)
         print(f"{path.name}: success {figures['success_rate']:.0%} over {figures['episodes']} "
               "episodes", flush=True)

@@ -8,6 +8,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
+from rigid_gym.agents import evaluate as evaluate_module
 from rigid_gym.agents.evaluate import evaluate, load_model
 from rigid_gym.agents.train import (
     DEMO_SEED,
@@ -23,7 +24,7 @@ COMMITTED = Path(__file__).resolve().parent.parent / "agents" / "models"
 
 @pytest.mark.parametrize("env_id", ["rigid_gym/Push-v0", "rigid_gym/Stack-v0",
                                     "rigid_gym/Throw-v0", "rigid_gym/PushDense-v0"])
-def test_a_short_run_trains_saves_and_evaluates(env_id, tmp_path):
+def test_a_short_run_trains_saves_and_evaluates(env_id, tmp_path, monkeypatch):
     settings = load_hyperparams(env_id)
     # HER samples only from finished episodes: learning starts after the first one
     start = gym.spec(env_id).max_episode_steps + 10
@@ -54,6 +55,22 @@ def test_a_short_run_trains_saves_and_evaluates(env_id, tmp_path):
     assert [p["env_steps"] for p in saved["curve"]] == [steps // 2, steps, steps]
     assert saved["curve"][-1]["success"] == saved["success"]
     assert saved["wall_s"] >= saved["curve"][-2]["wall_s"] > 0 and saved["cpu_s"] > 0
+    # committed as agents/models would hold it: smaller, with its settings and evaluation,
+    # and acting as the run's policy does
+    monkeypatch.setattr(evaluate_module, "MODELS", tmp_path / "models")
+    (tmp_path / "models").mkdir()
+    figures = evaluate_module.commit_model(folder, "committed", episodes=1)
+    committed = tmp_path / "models" / "committed.zip"
+    meta = json.loads(committed.with_suffix(".json").read_text())
+    assert meta["env_id"] == env_id and meta["evaluation"]["success_rate"] == figures[
+        "success_rate"] and meta["selected_env_steps"] == saved["selected_env_steps"]
+    source = Path(meta["source"])  # the run's selected_model.zip, else (no checkpoints) model.zip
+    assert source.parent == folder and committed.stat().st_size <= source.stat().st_size
+    env = gym.make(env_id)
+    run_model, kept = (load_model(path, env) for path in (source, committed))
+    obs, _ = env.reset(seed=0)
+    np.testing.assert_array_equal(run_model.predict(obs, deterministic=True)[0],
+                                  kept.predict(obs, deterministic=True)[0])
 
 
 def test_demonstrations_are_stored_as_the_scripted_policy_played_them():
