@@ -3,6 +3,7 @@
 import re
 
 import pytest
+from rigid_gym.agents.train import load_hyperparams
 
 from rigid_gym.cli import main
 
@@ -160,7 +161,9 @@ def test_train_says_what_it_does_while_it_prepares_and_evaluates(tmp_path, capsy
                  str(tmp_path), "--eval-freq", "120", "--eval-episodes", "1",
                  "--final-episodes", "2"]) == 0
     err = capsys.readouterr().err
-    for stage in ("making 4 env(s) and the bc_sac model", "training bc_sac for 120 env steps",
+    n_envs = load_hyperparams("rigid_gym/Stack-v0")["n_envs"]
+    for stage in (f"making {n_envs} env(s) and the bc_sac model",
+                  "training bc_sac for 120 env steps",
                   "final evaluation, 2 episodes"):
         assert stage in err
     assert "\r" not in err  # standard output is not a terminal: no bars redrawn in a log
