@@ -39,8 +39,8 @@ class SolverConfig:
         than about edge length / (2 box_edge_segments) (benchmarks/box_edge_samples.py).
     sweep: broad phase by sort-and-sweep (True) or brute force (False); None chooses
         sort-and-sweep from ``collision.SWEEP_MIN_BODIES`` bounded bodies.
-    sleep: skip a body resting alone on a static or kinematic one while its step is a fixed
-        point (``src/sleep.h``); exact, so off only to measure what it saves.
+    sleep: skip an island of bodies in contact (a stack, a cube on the table) while its step
+        is a fixed point (``src/sleep.h``); exact, so off only to measure what it saves.
     keep_energy: after each rotation update, turn a dynamic body's orientation by the smallest
         body-frame rotation that gives it back the rotational kinetic energy it had (L is the
         stored state, so |L| is exact anyway): a free body then keeps |L| and E to round-off

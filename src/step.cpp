@@ -173,7 +173,7 @@ int64_t step_world(WorldStep& w, int64_t steps, double dt) {
             }
         }
         if (c.sleep) {
-            keep_rest_impulses(w);
+            keep_pair_impulses(w);
         }
         if (c.overlap_correction > 0.0 && *w.contacts.detected) {
             correct_overlap(w, *w.rest.awake_pairs, dt, c.overlap_correction);
