@@ -98,20 +98,64 @@ Vec3 previous_impulse(const Rest& rest, int64_t key) {
     return {0.0, 0.0, 0.0};  // not reached: an island with a new pair is awake
 }
 
-}  // namespace
-
-void mark_asleep(WorldStep& w, int64_t count) {
+// With Settings::sleep_speed: each dynamic body's time below it (|V| + |omega| reach, the
+// fastest any of its points can move), reset in an island that is disturbed (rest.slow
+// clear); an undisturbed island whose every body has been that slow for SLEEP_TIME is
+// stopped, its velocities zeroed, and sleeps (rest.slow stays set only for those, and for the
+// exact fixed points of rest.resting).
+void stop_slow_islands(WorldStep& w, double dt) {
     const BodyStates& s = w.bodies;
     const Span<const int32_t> motion = w.model.motion;
     const Rest& rest = w.rest;
     const int n = w.num_bodies();
-    find_islands(w, count);
-    for (int i = 0; i < n; ++i) {  // the same bodies and as many pairs as in the last step
-        rest.resting[i] = motion[i] == DYNAMIC && rest.island[i] == i &&
-                          rest.bodies[i] == rest.previous_bodies[i] &&
-                          rest.pairs[i] == rest.previous_pairs[i];
+    const double sleep_speed = w.settings->sleep_speed;
+    for (int i = 0; i < n; ++i) {
+        if (motion[i] != DYNAMIC) {
+            continue;
+        }
+        const int64_t r = rest.island[i];
+        const double speed = length(s.velocity[i]) + length(s.angular_velocity[i]) * w.body_reach[i];
+        rest.slow_time[i] = rest.slow[r] && speed < sleep_speed ? rest.slow_time[i] + dt : 0.0;
     }
-    for (int i = 0; i < n; ++i) {  // each body unchanged, in the same island, left alone
+    for (int i = 0; i < n; ++i) {
+        if (motion[i] == DYNAMIC && rest.slow_time[i] < SLEEP_TIME) {
+            rest.slow[rest.island[i]] = 0;
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        const int64_t r = rest.island[i];
+        if (motion[i] != DYNAMIC) {
+            continue;
+        }
+        if (rest.resting[r]) {
+            rest.slow[r] = 1;
+        } else if (rest.slow[r]) {
+            s.velocity[i] = {0.0, 0.0, 0.0};
+            s.angular_momentum[i] = {0.0, 0.0, 0.0};
+            s.angular_velocity[i] = {0.0, 0.0, 0.0};
+        }
+    }
+}
+
+}  // namespace
+
+void mark_asleep(WorldStep& w, int64_t count, double dt) {
+    const BodyStates& s = w.bodies;
+    const Span<const int32_t> motion = w.model.motion;
+    const Rest& rest = w.rest;
+    const int n = w.num_bodies();
+    const double sleep_speed = w.settings->sleep_speed;
+    find_islands(w, count);
+    // rest.slow: not disturbed (the same bodies and as many pairs as in the last step, no
+    // force, no attachment, its static and kinematic partners unchanged); rest.resting: and
+    // every body unchanged too
+    for (int i = 0; i < n; ++i) {
+        rest.slow[i] = motion[i] == DYNAMIC && rest.island[i] == i &&
+                       rest.bodies[i] == rest.previous_bodies[i] &&
+                       rest.pairs[i] == rest.previous_pairs[i];
+        rest.resting[i] = rest.slow[i];
+    }
+    for (int i = 0; i < n; ++i) {
         if (motion[i] != DYNAMIC) {
             continue;
         }
@@ -119,21 +163,36 @@ void mark_asleep(WorldStep& w, int64_t count) {
         const Vec3 f = s.force[i], t = s.torque[i];
         const bool pushed = f.x != 0.0 || t.x != 0.0 || f.y != 0.0 || t.y != 0.0 || f.z != 0.0 ||
                             t.z != 0.0;
-        if (rest.resting[r] && (rest.previous_island[i] != r || w.attached.parent[i] >= 0 ||
-                                pushed || !unchanged(s, i, snapshot_of(rest, i)))) {
+        if (rest.previous_island[i] != r || w.attached.parent[i] >= 0 || pushed) {
+            rest.slow[r] = 0;
+        }
+        if (rest.resting[r] && !unchanged(s, i, snapshot_of(rest, i))) {
             rest.resting[r] = 0;
         }
     }
-    for (int64_t k = 0; k < count; ++k) {  // the static and kinematic bodies it touches too
+    for (int64_t k = 0; k < count; ++k) {
         const int b = w.lists.pair_b[k];
         const int64_t r = rest.island[w.lists.pair_a[k]];
-        if (rest.resting[r] && motion[b] != DYNAMIC && !unchanged(s, b, snapshot_of(rest, b))) {
-            rest.resting[r] = 0;
+        if (rest.slow[r] && motion[b] != DYNAMIC && !unchanged(s, b, snapshot_of(rest, b))) {
+            rest.slow[r] = 0;
         }
     }
     for (int i = 0; i < n; ++i) {
-        rest.asleep[i] = motion[i] == DYNAMIC && rest.resting[rest.island[i]];
-        if (!rest.asleep[i]) {  // an asleep body's snapshot is its state: just compared
+        if (motion[i] == DYNAMIC) {
+            rest.resting[rest.island[i]] &= rest.slow[rest.island[i]];
+        }
+    }
+    if (sleep_speed > 0.0) {
+        stop_slow_islands(w, dt);
+    } else {
+        for (int i = 0; i < n; ++i) {
+            rest.slow[i] = rest.resting[i];
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        rest.asleep[i] = motion[i] == DYNAMIC && rest.slow[rest.island[i]];
+        if (motion[i] != DYNAMIC || !rest.resting[rest.island[i]]) {
+            // a fixed point's snapshot is its state, just compared; a stopped body's is new
             read_state(s, i, rest.snapshot.sub(static_cast<int64_t>(i) * SNAPSHOT, SNAPSHOT));
         }
         rest.previous_island[i] = rest.island[i];

@@ -23,6 +23,13 @@
 // anything touching it (a moving body listed with one of its bodies joins the island and
 // changes it), a force, a moving kinematic body it touches, wakes it.
 //
+// Piles and pyramids are no such fixed points: round-off moves them by ~1e-17 m a step. With
+// Settings::sleep_speed > 0 an island that is not disturbed (the same bodies and pairs, its
+// partners unchanged, no force or attachment) and whose every point has moved slower than
+// sleep_speed for SLEEP_TIME is stopped: its velocities are zeroed and it sleeps, as Box2D
+// and MuJoCo put islands to sleep. Stopped, it is a fixed point of the comparison above and
+// stays asleep until it is disturbed. That changes trajectories, so it is off by default.
+//
 // What the comparison cannot see wakes a world from Python (StepContext::forget): new masses,
 // friction or restitution, a reset or load, attaching and detaching. A relist in a step
 // (step.cpp) wakes its world too, and so does a growth of the pair buffers. The test of
@@ -34,11 +41,16 @@
 
 namespace rg {
 
-// At the start of a step, after the broad phase (its count pairs; pair_impulse zeroed):
-// find the islands, decide which sleep, move their pairs behind the awake ones
-// (rest.awake_pairs says how many those are) with the last step's impulses, and keep this
-// step's islands and states for the next.
-void mark_asleep(WorldStep& w, int64_t count);
+// s: how long an island must have moved slower than Settings::sleep_speed to be stopped
+// (Box2D's time to sleep).
+constexpr double SLEEP_TIME = 0.5;
+
+// At the start of a step of dt s, after the broad phase (its count pairs; pair_impulse
+// zeroed) and before the step keeps its starting velocities: find the islands, decide which
+// sleep (stopping the slow ones, with Settings::sleep_speed), move their pairs behind the
+// awake ones (rest.awake_pairs says how many those are) with the last step's impulses, and
+// keep this step's islands and states for the next.
+void mark_asleep(WorldStep& w, int64_t count, double dt);
 
 // Reorder the count pairs: those without an asleep body first, then those with one, each in
 // their order; returns how many are awake.

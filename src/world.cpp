@@ -175,6 +175,8 @@ StepContext::StepContext(int num_worlds, Geometry geometry, std::vector<int32_t>
     previous_bodies_.assign(b * n, 0);
     previous_pairs_.assign(b * n, 0);
     resting_.assign(b * n, 0);
+    slow_.assign(b * n, 0);
+    slow_time_.assign(b * n, 0.0);
     snapshot_.assign(b * n * SNAPSHOT, 0.0);
     previous_count_.assign(b, 0);
     previous_awake_.assign(b, 0);
@@ -262,7 +264,8 @@ WorldStep StepContext::world(int w) {
               world_rows(island_, w, n),          world_rows(previous_island_, w, n),
               world_rows(island_bodies_, w, n),   world_rows(island_pairs_, w, n),
               world_rows(previous_bodies_, w, n), world_rows(previous_pairs_, w, n),
-              world_rows(resting_, w, n),         world_rows(snapshot_, w, n * SNAPSHOT),
+              world_rows(resting_, w, n),         world_rows(slow_, w, n),
+              world_rows(slow_time_, w, n),       world_rows(snapshot_, w, n * SNAPSHOT),
               world_rows(previous_keys_, w, p),   world_rows(previous_impulse_, w, p),
               &previous_count_[w],                &previous_awake_[w]};
     s.timers = {world_rows(stage_seconds, w, STAGE_COUNT), world_rows(stage_calls, w, STAGE_COUNT),

@@ -29,6 +29,7 @@ struct Settings {
     bool sweep = false;        // broad phase by sort and sweep (else brute force)
     bool broad_phase = true;   // whether pairs are listed at all
     bool sleep = true;         // sleep.h
+    double sleep_speed = 0.0;  // sleep.h: m/s under which a slow island is stopped; 0: exact only
     bool detect_every_pass = false;  // contacts.h: the narrow phase in every pass
     bool keep_energy = true;   // integrate.h: rotation update put back on the body's energy
     double overlap_correction = 0.2;  // overlap.h: fraction of excess overlap removed per step
@@ -72,7 +73,9 @@ struct Rest {
     Span<int64_t> pairs;              // (n,) per island: the listed pairs of its bodies
     Span<int64_t> previous_bodies;    // (n,) the same two in the last step
     Span<int64_t> previous_pairs;     // (n,)
-    Span<uint8_t> resting;            // (n,) per island: may it sleep
+    Span<uint8_t> resting;            // (n,) per island: is it a fixed point (exactly asleep)
+    Span<uint8_t> slow;               // (n,) per island: stopped by sleep_speed
+    Span<double> slow_time;           // (n,) s each body has moved slower than sleep_speed
     Span<double> snapshot;            // (n * SNAPSHOT,) each body's state at the last step's start
     Span<int64_t> previous_keys;      // (P,) the last step's listed pairs as a n + b, in order
     Span<Vec3> previous_impulse;      // (P,) N s, their impulses
@@ -243,7 +246,8 @@ private:
     // sleeping
     Array<int64_t> awake_pairs_, island_, previous_island_, island_bodies_, island_pairs_,
         previous_bodies_, previous_pairs_, previous_keys_, previous_count_, previous_awake_;
-    Array<uint8_t> resting_;
+    Array<uint8_t> resting_, slow_;
+    Array<double> slow_time_;
     Array<double> snapshot_;
     Array<Vec3> previous_impulse_;
 };

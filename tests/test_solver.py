@@ -457,6 +457,33 @@ def test_resting_stacks_sleep_as_islands_and_wake_as_one():
     assert sleeping[2:300, second].all() and not sleeping[300:310, second].any()  # pushed
 
 
+def test_a_slow_island_is_stopped_by_sleep_speed_and_sleeps_until_struck():
+    """A 10-box pyramid moves by round-off (~1e-17 m a step), so it is no exact fixed point and
+    never sleeps by default. With sleep_speed its island is stopped once every box has been
+    slower than that for SLEEP_TIME (0.5 s), and then holds its pose bit for bit, until a
+    ball rolling into it wakes the whole island."""
+    scene = pyramid(4)
+    ball = scene.add_body(rg.Sphere(0.03), mass=0.2, friction=0.5, position=(-2.0, 0.0, 0.03),
+                          velocity=(1.0, 0.0, 0.0))
+    boxes = list(range(1, ball))
+    sleeping = {}
+    for speed in (0.0, 0.01):
+        world = rg.World(scene, config=rg.SolverConfig.for_scene(scene, sleep_speed=speed))
+        asleep, poses = [], []
+        for _ in range(720):
+            world.step(1)
+            asleep.append(world.sleeping()[boxes].all())
+            poses.append(world.position[boxes].copy())
+        sleeping[speed] = np.array(asleep)
+    assert not sleeping[0.0].any()
+    stopped = int(np.argmax(sleeping[0.01]))
+    assert 120 <= stopped < 360  # at least SLEEP_TIME (0.5 s = 120 steps) after the start
+    woken = stopped + int(np.argmin(sleeping[0.01][stopped:]))
+    assert stopped < woken < 720 and sleeping[0.01][stopped:woken].all()
+    assert all(np.array_equal(poses[stopped], poses[t]) for t in range(stopped, woken))
+    assert world.position[ball, 0] < 0.0  # the ball was stopped by the pyramid it woke
+
+
 def test_a_sleeping_cube_reports_its_weight_as_the_support_impulse():
     """While asleep, the cube's pair with the ground still transmits m g dt per step (what
     stepping it gives: the test above), exactly as the first steps at rest did."""
