@@ -36,6 +36,7 @@ at most ``RIGID_GYM_NUM_THREADS``).
     python benchmarks/speed.py --only solver     # one section: solver, envs or batched
     python benchmarks/speed.py --quick           # smoke run with small counts, about 15 s
     python benchmarks/speed.py --repeats 9       # more timings per median (default 5)
+    python benchmarks/speed.py --sleep-speed 0.01  # ours stopping slow islands too
 """
 
 import argparse
@@ -139,10 +140,13 @@ def dynamic_bodies(scene: rg.Scene) -> int:
     return sum(body.motion == DYNAMIC for body in scene.bodies)
 
 
-def build(engine: str, scene: rg.Scene):
-    """A world of ``engine`` (one of ENGINES) for ``scene``, or why a peer has none (str)."""
+def build(engine: str, scene: rg.Scene, sleep_speed: float = 0.0):
+    """A world of ``engine`` (one of ENGINES) for ``scene``, or why a peer has none (str);
+    ours stops islands slower than ``sleep_speed`` (m/s, SolverConfig.sleep_speed; 0: only
+    exact sleeping, the default)."""
     if engine == "ours":
-        return rg.World(scene, dt=DT)
+        return rg.World(scene, dt=DT, config=rg.SolverConfig.for_scene(scene,
+                                                                        sleep_speed=sleep_speed))
     module, world_class = PEERS[engine]
     if not peers.available()[module]:
         return 'not installed (pip install -e ".[compare]")'
@@ -174,17 +178,18 @@ def stepping_rate(world, steps: int, from_start: bool = False) -> float:
     return steps / (time.perf_counter() - start)
 
 
-def timed_rates(scenes, repeats: int) -> tuple[dict, dict]:
+def timed_rates(scenes, repeats: int, sleep_speed: float) -> tuple[dict, dict]:
     """({(scene name, engine): [steps/s of each repeat], or why the engine has no world
     (str)}, {(stack scene name, engine): mm its top cube moved in STACK_SECONDS after the
     timings}). Every world is built and settled first; then each repeat times every world
     once in turn (rates_in_rounds), so repeat r of every scene and engine falls in the same
     stretch of the run. Ratios and growth exponents are taken repeat by repeat (a VM whose
-    speed drifts while one engine's timings run would otherwise move the ratio)."""
+    speed drifts while one engine's timings run would otherwise move the ratio). Ours with
+    ``sleep_speed`` (``build``)."""
     worlds, runs = {}, {}
     for name, scene, settle, steps in scenes:
         for engine in ENGINES:
-            world = worlds[name, engine] = build(engine, scene)
+            world = worlds[name, engine] = build(engine, scene, sleep_speed)
             if not isinstance(world, str):
                 world.step(settle)
                 runs[name, engine] = functools.partial(stepping_rate, world, steps,
@@ -261,12 +266,15 @@ def print_pile_growth(rates: dict, scenes) -> None:
               + " | ".join(f"{t:.2f}" for t in per_step / counts) + f" | {k:.2f} |")
 
 
-def solver_section(quick: bool, repeats: int) -> None:
+def solver_section(quick: bool, repeats: int, sleep_speed: float = 0.0) -> None:
     scenes = solver_scenes(quick)
+    sleeping = (f"islands slower than {sleep_speed:g} m/s for 0.5 s stopped and asleep "
+                "(SolverConfig.sleep_speed)" if sleep_speed > 0.0 else
+                "exact sleeping only (SolverConfig's default)")
     print(f"\nSolver steps/s, dt = 1/240, one world (median of {repeats} timings after "
           "settling, every engine and scene timed in turn in each repeat; ratios are the "
-          "median over repeats of ours / theirs)\n")
-    rates, moved = timed_rates(scenes, repeats)
+          f"median over repeats of ours / theirs); ours: {sleeping}\n")
+    rates, moved = timed_rates(scenes, repeats, sleep_speed)
     print_solver_table(rates, scenes)
     print_stack_health(rates, moved, "10-cube stack")
     print_pile_growth(rates, scenes)
@@ -348,6 +356,8 @@ def main() -> None:
     parser.add_argument("--only", choices=["solver", "envs", "batched"])
     parser.add_argument("--quick", action="store_true", help="small counts: a smoke run")
     parser.add_argument("--repeats", type=int, default=5, help="timings per median")
+    parser.add_argument("--sleep-speed", type=float, default=0.0,
+                        help="ours: SolverConfig.sleep_speed, m/s (default 0: exact sleeping)")
     parser.add_argument("--out", type=Path, default=None,
                         help="also write the tables to this markdown file (README quotes "
                              "docs/benchmarks.md, written by a whole run)")
@@ -359,7 +369,8 @@ def main() -> None:
         sys.stdout = Tee(sys.stdout, out)
     try:
         print(machine_line(), flush=True)
-        sections = {"solver": solver_section, "envs": envs_section, "batched": batched_section}
+        sections = {"solver": functools.partial(solver_section, sleep_speed=args.sleep_speed),
+                    "envs": envs_section, "batched": batched_section}
         for name, section in sections.items():
             if args.only in (None, name):
                 section(args.quick, args.repeats)

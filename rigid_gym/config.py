@@ -39,8 +39,14 @@ class SolverConfig:
         than about edge length / (2 box_edge_segments) (benchmarks/box_edge_samples.py).
     sweep: broad phase by sort-and-sweep (True) or brute force (False); None chooses
         sort-and-sweep from ``collision.SWEEP_MIN_BODIES`` bounded bodies.
-    sleep: skip a body resting alone on a static or kinematic one while its step is a fixed
-        point (``src/sleep.h``); exact, so off only to measure what it saves.
+    sleep: skip an island of bodies in contact (a stack, a cube on the table) while its step
+        is a fixed point (``src/sleep.h``); exact, so off only to measure what it saves.
+    sleep_speed: m/s, 0 to 10; above 0 (and with ``sleep``), an island whose every point
+        has moved slower than this for 0.5 s is stopped (its velocities zeroed)
+        and sleeps until something touches or pushes it, as Box2D and MuJoCo sleep: what a
+        settled pile or pyramid needs, whose round-off motion is no exact fixed point. It
+        changes trajectories (a body creeping slower than it stops), so it is off (0) by
+        default; 0.01 stops piles within a second of settling (docs/architecture.md).
     keep_energy: after each rotation update, turn a dynamic body's orientation by the smallest
         body-frame rotation that gives it back the rotational kinetic energy it had (L is the
         stored state, so |L| is exact anyway): a free body then keeps |L| and E to round-off
@@ -63,6 +69,7 @@ class SolverConfig:
     box_edge_segments: int = 4
     sweep: bool | None = None
     sleep: bool = True
+    sleep_speed: float = 0.0
     detect_every_pass: bool = False
     keep_energy: bool = True
     overlap_correction: float = 0.2
@@ -76,6 +83,11 @@ class SolverConfig:
             raise ValueError("SolverConfig.overlap_correction: expected a number, got "
                              f"{self.overlap_correction!r}")
         in_range(self.overlap_correction, 0.0, 1.0, "SolverConfig.overlap_correction")
+        if isinstance(self.sleep_speed, bool) or not isinstance(
+                self.sleep_speed, (int, float, np.floating)):
+            raise ValueError("SolverConfig.sleep_speed: expected a number of m/s, got "
+                             f"{self.sleep_speed!r}")
+        in_range(self.sleep_speed, 0.0, 10.0, "SolverConfig.sleep_speed")
         if self.rotation_order not in ROTATION_ORDERS:
             raise ValueError(f"SolverConfig.rotation_order must be one of {ROTATION_ORDERS}, "
                              f"got {self.rotation_order!r}")
@@ -114,7 +126,8 @@ class SolverConfig:
         return {"collision_passes": self.collision_passes, "contact_passes": self.contact_passes,
                 "shock_sweeps": self.shock_sweeps, "rotation_order": self.rotation_order,
                 "sweep": bool(sweep), "broad_phase": self.phases()["broad_phase"],
-                "sleep": self.sleep, "detect_every_pass": self.detect_every_pass,
+                "sleep": self.sleep, "sleep_speed": float(self.sleep_speed),
+                "detect_every_pass": self.detect_every_pass,
                 "keep_energy": self.keep_energy, "overlap_correction": self.overlap_correction,
                 "gravity": magnitude, "up": tuple(float(u) for u in up)}
 

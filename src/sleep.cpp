@@ -1,6 +1,7 @@
 // Which bodies sleep through a step, exactly (sleep.h).
 #include "sleep.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace rg {
@@ -37,53 +38,171 @@ bool unchanged(const BodyStates& bodies, int i, Span<const double> snapshot) {
     return same;
 }
 
-// Body i is listed with body j.
-void note_partner(Span<int64_t> partner, Span<const int32_t> motion, int i, int j) {
-    partner[i] = partner[i] == NONE && motion[j] != DYNAMIC ? j : SEVERAL;
-}
-
 Span<const double> snapshot_of(const Rest& rest, int i) {
     const Span<double> row = rest.snapshot.sub(static_cast<int64_t>(i) * SNAPSHOT, SNAPSHOT);
     return {row.data, row.size};
 }
 
-}  // namespace
+// The root of body i's island in the union-find forest rest.island, halving the path.
+int64_t root_of(Span<int64_t> parent, int64_t i) {
+    while (parent[i] != i) {
+        parent[i] = parent[parent[i]];
+        i = parent[i];
+    }
+    return i;
+}
 
-void mark_asleep(WorldStep& w, int64_t count) {
+// rest.island: each dynamic body's island, named by its least body index (-1 for static and
+// kinematic bodies); rest.bodies and rest.pairs counted per island.
+void find_islands(WorldStep& w, int64_t count) {
+    const Rest& rest = w.rest;
+    const Span<const int32_t> motion = w.model.motion;
+    const int n = w.num_bodies();
+    for (int i = 0; i < n; ++i) {
+        rest.island[i] = motion[i] == DYNAMIC ? i : -1;
+        rest.bodies[i] = 0;
+        rest.pairs[i] = 0;
+    }
+    for (int64_t k = 0; k < count; ++k) {  // a is dynamic (broad_phase.h)
+        const int b = w.lists.pair_b[k];
+        if (motion[b] == DYNAMIC) {
+            const int64_t ra = root_of(rest.island, w.lists.pair_a[k]);
+            const int64_t rb = root_of(rest.island, b);
+            rest.island[std::max(ra, rb)] = std::min(ra, rb);
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        if (motion[i] == DYNAMIC) {
+            rest.island[i] = root_of(rest.island, i);
+            rest.bodies[rest.island[i]] += 1;
+        }
+    }
+    for (int64_t k = 0; k < count; ++k) {
+        rest.pairs[rest.island[w.lists.pair_a[k]]] += 1;
+    }
+}
+
+// The impulse pair key (a n + b) transmitted in the last step: the last step's list is two
+// runs sorted by key, its awake pairs and its asleep ones (move_asleep_last keeps each in
+// order), and an asleep island's pairs were all listed then.
+Vec3 previous_impulse(const Rest& rest, int64_t key) {
+    const int64_t runs[3] = {0, *rest.previous_awake, *rest.previous_count};
+    for (int r = 0; r < 2; ++r) {
+        const int64_t* first = rest.previous_keys.data + runs[r];
+        const int64_t* last = rest.previous_keys.data + runs[r + 1];
+        const int64_t* found = std::lower_bound(first, last, key);
+        if (found != last && *found == key) {
+            return rest.previous_impulse[found - rest.previous_keys.data];
+        }
+    }
+    return {0.0, 0.0, 0.0};  // not reached: an island with a new pair is awake
+}
+
+// With Settings::sleep_speed: each dynamic body's time below it (|V| + |omega| reach, the
+// fastest any of its points can move), reset in an island that is disturbed (rest.slow
+// clear); an undisturbed island whose every body has been that slow for SLEEP_TIME is
+// stopped, its velocities zeroed, and sleeps (rest.slow stays set only for those, and for the
+// exact fixed points of rest.resting).
+void stop_slow_islands(WorldStep& w, double dt) {
     const BodyStates& s = w.bodies;
     const Span<const int32_t> motion = w.model.motion;
     const Rest& rest = w.rest;
     const int n = w.num_bodies();
+    const double sleep_speed = w.settings->sleep_speed;
     for (int i = 0; i < n; ++i) {
-        rest.partner[i] = NONE;
-    }
-    for (int64_t k = 0; k < count; ++k) {
-        note_partner(rest.partner, motion, w.lists.pair_a[k], w.lists.pair_b[k]);
-        note_partner(rest.partner, motion, w.lists.pair_b[k], w.lists.pair_a[k]);
-    }
-    for (int i = 0; i < n; ++i) {
-        const int64_t p = rest.partner[i];
-        rest.asleep[i] = 0;
-        if (motion[i] != DYNAMIC || p < 0 || p != rest.previous_partner[i] ||
-            w.attached.parent[i] >= 0) {
+        if (motion[i] != DYNAMIC) {
             continue;
         }
+        const int64_t r = rest.island[i];
+        const double speed = length(s.velocity[i]) + length(s.angular_velocity[i]) * w.body_reach[i];
+        rest.slow_time[i] = rest.slow[r] && speed < sleep_speed ? rest.slow_time[i] + dt : 0.0;
+    }
+    for (int i = 0; i < n; ++i) {
+        if (motion[i] == DYNAMIC && rest.slow_time[i] < SLEEP_TIME) {
+            rest.slow[rest.island[i]] = 0;
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        const int64_t r = rest.island[i];
+        if (motion[i] != DYNAMIC) {
+            continue;
+        }
+        if (rest.resting[r]) {
+            rest.slow[r] = 1;
+        } else if (rest.slow[r]) {
+            s.velocity[i] = {0.0, 0.0, 0.0};
+            s.angular_momentum[i] = {0.0, 0.0, 0.0};
+            s.angular_velocity[i] = {0.0, 0.0, 0.0};
+        }
+    }
+}
+
+}  // namespace
+
+void mark_asleep(WorldStep& w, int64_t count, double dt) {
+    const BodyStates& s = w.bodies;
+    const Span<const int32_t> motion = w.model.motion;
+    const Rest& rest = w.rest;
+    const int n = w.num_bodies();
+    const double sleep_speed = w.settings->sleep_speed;
+    find_islands(w, count);
+    // rest.slow: not disturbed (the same bodies and as many pairs as in the last step, no
+    // force, no attachment, its static and kinematic partners unchanged); rest.resting: and
+    // every body unchanged too
+    for (int i = 0; i < n; ++i) {
+        rest.slow[i] = motion[i] == DYNAMIC && rest.island[i] == i &&
+                       rest.bodies[i] == rest.previous_bodies[i] &&
+                       rest.pairs[i] == rest.previous_pairs[i];
+        rest.resting[i] = rest.slow[i];
+    }
+    for (int i = 0; i < n; ++i) {
+        if (motion[i] != DYNAMIC) {
+            continue;
+        }
+        const int64_t r = rest.island[i];
         const Vec3 f = s.force[i], t = s.torque[i];
         const bool pushed = f.x != 0.0 || t.x != 0.0 || f.y != 0.0 || t.y != 0.0 || f.z != 0.0 ||
                             t.z != 0.0;
-        rest.asleep[i] = !pushed && unchanged(s, i, snapshot_of(rest, i)) &&
-                         unchanged(s, static_cast<int>(p), snapshot_of(rest, static_cast<int>(p)));
+        if (rest.previous_island[i] != r || w.attached.parent[i] >= 0 || pushed) {
+            rest.slow[r] = 0;
+        }
+        if (rest.resting[r] && !unchanged(s, i, snapshot_of(rest, i))) {
+            rest.resting[r] = 0;
+        }
+    }
+    for (int64_t k = 0; k < count; ++k) {
+        const int b = w.lists.pair_b[k];
+        const int64_t r = rest.island[w.lists.pair_a[k]];
+        if (rest.slow[r] && motion[b] != DYNAMIC && !unchanged(s, b, snapshot_of(rest, b))) {
+            rest.slow[r] = 0;
+        }
     }
     for (int i = 0; i < n; ++i) {
-        if (!rest.asleep[i]) {  // an asleep body's snapshot is its state: just compared
+        if (motion[i] == DYNAMIC) {
+            rest.resting[rest.island[i]] &= rest.slow[rest.island[i]];
+        }
+    }
+    if (sleep_speed > 0.0) {
+        stop_slow_islands(w, dt);
+    } else {
+        for (int i = 0; i < n; ++i) {
+            rest.slow[i] = rest.resting[i];
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        rest.asleep[i] = motion[i] == DYNAMIC && rest.slow[rest.island[i]];
+        if (motion[i] != DYNAMIC || !rest.resting[rest.island[i]]) {
+            // a fixed point's snapshot is its state, just compared; a stopped body's is new
             read_state(s, i, rest.snapshot.sub(static_cast<int64_t>(i) * SNAPSHOT, SNAPSHOT));
         }
-        rest.previous_partner[i] = rest.partner[i];
+        rest.previous_island[i] = rest.island[i];
+        rest.previous_bodies[i] = rest.bodies[i];
+        rest.previous_pairs[i] = rest.pairs[i];
     }
     const int64_t awake = move_asleep_last(w, count);
     for (int64_t k = awake; k < count; ++k) {
-        const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
-        w.pair_impulse[k] = rest.asleep[a] ? rest.impulse[a] : scale(-1.0, rest.impulse[b]);
+        w.pair_impulse[k] = previous_impulse(rest, static_cast<int64_t>(w.lists.pair_a[k]) * n +
+                                                       w.lists.pair_b[k]);
     }
     *rest.awake_pairs = awake;
 }
@@ -109,23 +228,21 @@ int64_t move_asleep_last(WorldStep& w, int64_t count) {
     return awake;
 }
 
-void keep_rest_impulses(WorldStep& w) {
+void keep_pair_impulses(WorldStep& w) {
     const Rest& rest = w.rest;
+    const int64_t n = w.num_bodies();
     for (int64_t k = 0; k < *w.pair_count; ++k) {
-        const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
-        if (rest.partner[a] == b) {
-            rest.impulse[a] = w.pair_impulse[k];
-        }
-        if (rest.partner[b] == a) {
-            rest.impulse[b] = scale(-1.0, w.pair_impulse[k]);
-        }
+        rest.previous_keys[k] = static_cast<int64_t>(w.lists.pair_a[k]) * n + w.lists.pair_b[k];
+        rest.previous_impulse[k] = w.pair_impulse[k];
     }
+    *rest.previous_count = *w.pair_count;
+    *rest.previous_awake = *rest.awake_pairs;
 }
 
 void wake_world(WorldStep& w, int64_t count) {
     for (int i = 0; i < w.num_bodies(); ++i) {
         w.rest.asleep[i] = 0;
-        w.rest.previous_partner[i] = SEVERAL;
+        w.rest.previous_island[i] = -1;
     }
     *w.rest.awake_pairs = count;
 }

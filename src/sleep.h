@@ -1,47 +1,64 @@
-// Sleeping: a body whose last step changed nothing is not stepped again, exactly.
+// Sleeping: an island whose last step changed nothing is not stepped again, exactly.
 //
-// The step is a deterministic function of the state. A dynamic body whose only listed pair is
-// with one static or kinematic body (a cube resting on the table) is solved by that pair
-// alone: the pair shares no movable body with any other, so the contact stage resolves it at
-// e = 0 on its own (solver.cpp), and shock propagation puts the body on level 1 against its
-// one frozen support; extra passes or sweeps that other bodies need find the same state again
-// and apply nothing. So if, at the start of a step, such a body, its partner and its pair are
-// exactly (bit for bit) as they were at the start of the last step, and no force, torque or
+// The step is a deterministic function of the state. Bodies joined by listed pairs form
+// islands (static and kinematic bodies join nothing: they take no impulse, so the pairs they
+// share carry nothing from one island to another). What the impulse stages do to an island
+// depends only on its own bodies, its pairs and the static or kinematic bodies it touches:
+// a pair's resolve reads and writes only its two bodies, so pairs of other islands commute
+// with it, and the passes or sweeps that other islands still need find this island as their
+// last one left it and apply nothing. The pairs of an island are listed in the order of
+// their (a, b) indices (broad_phase.h), so the same pairs are the same sequence.
+//
+// So if, at the start of a step, every body of an island and every static or kinematic body
+// it touches is exactly (bit for bit) as it was at the start of the last step, the island
+// has the same bodies and the same number of listed pairs as then, and no force, torque or
 // attachment acts on it, this step would leave it exactly where the last one did: where it
-// is. The body is then asleep for the step: its pair is moved behind the awake pairs, which
-// are all the impulse stages see (their order kept, and what the stages do with a pair depends
-// only on the pairs sharing a movable body with it); its velocities are put back before the
-// position update (which then moves it by the same velocity as the last step's, i.e. nowhere:
-// it is a fixed point); and its pair reports the impulse it transmitted in the last step, as
-// stepping it would.
+// is. (Its pairs are then the same: the broad phase lists an island's pairs from its bodies'
+// and their partners' states, and a partner unchanged since the last step was listed then.)
+// The island is then asleep for the step: its pairs are moved behind the awake pairs, which
+// are all the impulse stages see (their order kept); its bodies' velocities are put back
+// before the position update (which then moves them by the same velocities as the last
+// step's, i.e. nowhere: a fixed point); and each of its pairs reports the impulse it
+// transmitted in the last step, as stepping it would. A settled stack is such a fixed point;
+// anything touching it (a moving body listed with one of its bodies joins the island and
+// changes it), a force, a moving kinematic body it touches, wakes it.
+//
+// Piles and pyramids are no such fixed points: round-off moves them by ~1e-17 m a step. With
+// Settings::sleep_speed > 0 an island that is not disturbed (the same bodies and pairs, its
+// partners unchanged, no force or attachment) and whose every point has moved slower than
+// sleep_speed for SLEEP_TIME is stopped: its velocities are zeroed and it sleeps, as Box2D
+// and MuJoCo put islands to sleep. Stopped, it is a fixed point of the comparison above and
+// stays asleep until it is disturbed. That changes trajectories, so it is off by default.
 //
 // What the comparison cannot see wakes a world from Python (StepContext::forget): new masses,
 // friction or restitution, a reset or load, attaching and detaching. A relist in a step
-// (step.cpp) wakes its world too. The test of exactness is stepping with sleeping on and off
-// and comparing every state and impulse bit for bit (tests/test_solver.py).
+// (step.cpp) wakes its world too, and so does a growth of the pair buffers. The test of
+// exactness is stepping with sleeping on and off and comparing every state and impulse bit
+// for bit (tests/test_solver.py).
 #pragma once
 
 #include "world.h"
 
 namespace rg {
 
-// Rest::partner values: no pair; more than one, or one with a dynamic body (also: forgotten).
-constexpr int64_t NONE = -2;
-constexpr int64_t SEVERAL = -1;
+// s: how long an island must have moved slower than Settings::sleep_speed to be stopped
+// (Box2D's time to sleep).
+constexpr double SLEEP_TIME = 0.5;
 
-// At the start of a step, after the broad phase (its count pairs; pair_impulse zeroed):
-// decide which bodies are asleep, move their pairs behind the awake ones (rest.awake_pairs
-// says how many those are) with the last step's impulses, and keep this step's partners and
-// states for the next.
-void mark_asleep(WorldStep& w, int64_t count);
+// At the start of a step of dt s, after the broad phase (its count pairs; pair_impulse
+// zeroed) and before the step keeps its starting velocities: find the islands, decide which
+// sleep (stopping the slow ones, with Settings::sleep_speed), move their pairs behind the
+// awake ones (rest.awake_pairs says how many those are) with the last step's impulses, and
+// keep this step's islands and states for the next.
+void mark_asleep(WorldStep& w, int64_t count, double dt);
 
 // Reorder the count pairs: those without an asleep body first, then those with one, each in
 // their order; returns how many are awake.
 int64_t move_asleep_last(WorldStep& w, int64_t count);
 
-// At the end of the impulse stages: the impulse each body with one static or kinematic
-// partner took through its pair (for the next step, should it sleep).
-void keep_rest_impulses(WorldStep& w);
+// At the end of the impulse stages: the step's listed pairs and their impulses, for the
+// next step's asleep pairs.
+void keep_pair_impulses(WorldStep& w);
 
 // No body sleeps in the rest of this step (all its count pairs are awake) or in the next.
 void wake_world(WorldStep& w, int64_t count);

@@ -130,12 +130,12 @@ int64_t step_world(WorldStep& w, int64_t steps, double dt) {
             return done;
         }
         clear_impulses(w, count);
-        keep_velocities(w, true);
         *w.contacts.detected = 0;
         *w.rest.awake_pairs = count;
         if (c.sleep) {
-            mark_asleep(w, count);
+            mark_asleep(w, count, dt);  // may stop slow islands: before the velocities are kept
         }
+        keep_velocities(w, true);
         since = lap(w.timers, BROAD_STAGE, since, c.broad_phase ? 1 : 0);
         // 1-4. collision, velocity update, contact, shock propagation
         since = impulse_stages(w, dt, *w.rest.awake_pairs, since);
@@ -173,7 +173,7 @@ int64_t step_world(WorldStep& w, int64_t steps, double dt) {
             }
         }
         if (c.sleep) {
-            keep_rest_impulses(w);
+            keep_pair_impulses(w);
         }
         if (c.overlap_correction > 0.0 && *w.contacts.detected) {
             correct_overlap(w, *w.rest.awake_pairs, dt, c.overlap_correction);

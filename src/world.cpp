@@ -168,10 +168,18 @@ StepContext::StepContext(int num_worlds, Geometry geometry, std::vector<int32_t>
     awake_pairs_.assign(b, 0);
     stage_seconds.assign(b * STAGE_COUNT, 0.0);
     stage_calls.assign(b * STAGE_COUNT, 0);
-    partner_.assign(b * n, NONE);
-    previous_partner_.assign(b * n, SEVERAL);
+    island_.assign(b * n, -1);
+    previous_island_.assign(b * n, -1);
+    island_bodies_.assign(b * n, 0);
+    island_pairs_.assign(b * n, 0);
+    previous_bodies_.assign(b * n, 0);
+    previous_pairs_.assign(b * n, 0);
+    resting_.assign(b * n, 0);
+    slow_.assign(b * n, 0);
+    slow_time_.assign(b * n, 0.0);
     snapshot_.assign(b * n * SNAPSHOT, 0.0);
-    rest_impulse_.assign(b * n, {0.0, 0.0, 0.0});
+    previous_count_.assign(b, 0);
+    previous_awake_.assign(b, 0);
     allocate_pairs(std::max<int64_t>(8, 2 * n));
     contacts_.allocate_rows(num_worlds_, 8 * pair_capacity_);
 }
@@ -189,6 +197,10 @@ void StepContext::allocate_pairs(int64_t capacity) {
     }
     keys_.assign(b * capacity, 0);
     spare_.assign(b * capacity, 0);
+    // the last step's pairs are not carried over: nothing sleeps in the next step
+    previous_keys_.assign(b * capacity, 0);
+    previous_impulse_.assign(b * capacity, {0.0, 0.0, 0.0});
+    forget(0, num_worlds_);
     graph_.allocate(num_worlds_, num_bodies_, capacity);
     contacts_.allocate_pairs(num_worlds_, capacity);
     pair_capacity_ = capacity;
@@ -213,7 +225,7 @@ void StepContext::grow_pairs(int64_t needed) {
 void StepContext::forget(int first, int last) {
     for (int64_t k = static_cast<int64_t>(first) * num_bodies_;
          k < static_cast<int64_t>(last) * num_bodies_; ++k) {
-        previous_partner_[k] = SEVERAL;
+        previous_island_[k] = -1;
     }
 }
 
@@ -248,9 +260,14 @@ WorldStep StepContext::world(int w) {
     s.pairs_of = world_rows(pairs_of_, w, n);
     s.overlap_shift = world_rows(overlap_shift_, w, n);
     s.graph = graph_.rows(w);
-    s.rest = {world_rows(asleep, w, n),          &awake_pairs_[w],
-              world_rows(partner_, w, n),        world_rows(previous_partner_, w, n),
-              world_rows(snapshot_, w, n * SNAPSHOT), world_rows(rest_impulse_, w, n)};
+    s.rest = {world_rows(asleep, w, n),           &awake_pairs_[w],
+              world_rows(island_, w, n),          world_rows(previous_island_, w, n),
+              world_rows(island_bodies_, w, n),   world_rows(island_pairs_, w, n),
+              world_rows(previous_bodies_, w, n), world_rows(previous_pairs_, w, n),
+              world_rows(resting_, w, n),         world_rows(slow_, w, n),
+              world_rows(slow_time_, w, n),       world_rows(snapshot_, w, n * SNAPSHOT),
+              world_rows(previous_keys_, w, p),   world_rows(previous_impulse_, w, p),
+              &previous_count_[w],                &previous_awake_[w]};
     s.timers = {world_rows(stage_seconds, w, STAGE_COUNT), world_rows(stage_calls, w, STAGE_COUNT),
                 timed};
     return s;

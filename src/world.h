@@ -29,6 +29,7 @@ struct Settings {
     bool sweep = false;        // broad phase by sort and sweep (else brute force)
     bool broad_phase = true;   // whether pairs are listed at all
     bool sleep = true;         // sleep.h
+    double sleep_speed = 0.0;  // sleep.h: m/s under which a slow island is stopped; 0: exact only
     bool detect_every_pass = false;  // contacts.h: the narrow phase in every pass
     bool keep_energy = true;   // integrate.h: rotation update put back on the body's energy
     double overlap_correction = 0.2;  // overlap.h: fraction of excess overlap removed per step
@@ -61,14 +62,25 @@ struct Graph {
     Span<int64_t> level_pairs;      // (P,)
 };
 
-// Sleeping's bookkeeping (sleep.h), kept from step to step.
+// Sleeping's bookkeeping (sleep.h), kept from step to step. An island is named by its root,
+// the least index of its dynamic bodies; per-island rows are kept at the root's index.
 struct Rest {
     Span<uint8_t> asleep;             // (n,) skipped by the current step
     int64_t* awake_pairs;             // how many of the step's listed pairs (the first) are awake
-    Span<int64_t> partner;            // (n,) the one static/kinematic partner, or SEVERAL/NONE
-    Span<int64_t> previous_partner;   // (n,) the same, in the last step
+    Span<int64_t> island;             // (n,) each dynamic body's island, -1 for the others
+    Span<int64_t> previous_island;    // (n,) the same in the last step; -1: forgotten
+    Span<int64_t> bodies;             // (n,) per island: its bodies
+    Span<int64_t> pairs;              // (n,) per island: the listed pairs of its bodies
+    Span<int64_t> previous_bodies;    // (n,) the same two in the last step
+    Span<int64_t> previous_pairs;     // (n,)
+    Span<uint8_t> resting;            // (n,) per island: is it a fixed point (exactly asleep)
+    Span<uint8_t> slow;               // (n,) per island: stopped by sleep_speed
+    Span<double> slow_time;           // (n,) s each body has moved slower than sleep_speed
     Span<double> snapshot;            // (n * SNAPSHOT,) each body's state at the last step's start
-    Span<Vec3> impulse;               // (n,) N s, each such body's impulse in the last step
+    Span<int64_t> previous_keys;      // (P,) the last step's listed pairs as a n + b, in order
+    Span<Vec3> previous_impulse;      // (P,) N s, their impulses
+    int64_t* previous_count;          // how many pairs the last step listed
+    int64_t* previous_awake;          // how many of them (the first) were awake
 };
 
 // Contacts found once per step (contacts.h): per listed pair (P,) and a pool of rows (Q,).
@@ -232,9 +244,12 @@ private:
     Array<Vec3> overlap_shift_;
     GraphBuffers graph_;
     // sleeping
-    Array<int64_t> awake_pairs_, partner_, previous_partner_;
+    Array<int64_t> awake_pairs_, island_, previous_island_, island_bodies_, island_pairs_,
+        previous_bodies_, previous_pairs_, previous_keys_, previous_count_, previous_awake_;
+    Array<uint8_t> resting_, slow_;
+    Array<double> slow_time_;
     Array<double> snapshot_;
-    Array<Vec3> rest_impulse_;
+    Array<Vec3> previous_impulse_;
 };
 
 }  // namespace rg

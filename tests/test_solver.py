@@ -400,10 +400,10 @@ def step_with_interventions(world, steps):
 
 
 def test_sleeping_is_exact():
-    """A body resting alone on a static or kinematic one, whose last step changed nothing,
-    is skipped (src/sleep.h): states and pair impulses are bit-identical to stepping
-    everything, through a ball striking a resting cube, a pad landing on one and pushing it,
-    a new mass and a force; and bodies did sleep (else the test would pass vacuously)."""
+    """An island whose last step changed nothing is skipped (src/sleep.h): states and pair
+    impulses are bit-identical to stepping everything, through a ball striking a resting
+    cube, a pad landing on one and pushing it, a new mass and a force; and bodies did sleep
+    (else the test would pass vacuously)."""
     scene = sleeping_scene()
     config = rg.SolverConfig.for_scene(scene)
     states, sleeping = step_with_interventions(rg.World(scene, config=config), 400)
@@ -419,6 +419,69 @@ def test_sleeping_is_exact():
     assert not sleeping[200:300, cube1].any()  # pushed by the pad
     assert not sleeping[250, cube2] and not sleeping[300:340, cube2].any()  # new mass, pushed
     assert sleeping[-1].any()  # and one has come to rest again
+
+
+def test_resting_stacks_sleep_as_islands_and_wake_as_one():
+    """Two settled 5-cube stacks are bit-exact fixed points, so each island sleeps from its
+    first steps. A ball rolling into the first stack's bottom cube wakes that whole island,
+    its top cube too, which the ball never touches, and not the other stack; a force on the
+    other's top cube then wakes that one. Every state and impulse is bit-identical to
+    stepping with sleeping off."""
+    scene = scenes.cube_stack(5)
+    for k in range(5):
+        scene.add_body(rg.Box((H,) * 3), mass=1.0, friction=0.5,
+                       position=(1.0, 0.0, H + 2 * H * k))
+    scene.add_body(rg.Sphere(0.03), mass=0.2, friction=0.5, position=(-0.6, 0.0, 0.03),
+                   velocity=(3.0, 0.0, 0.0))
+    first, second = list(range(1, 6)), list(range(6, 11))
+    config = rg.SolverConfig.for_scene(scene)
+    runs = {}
+    for sleep in (True, False):
+        world = rg.World(scene, config=dataclasses.replace(config, sleep=sleep))
+        states, sleeping = [], []
+        for t in range(360):
+            if t == 300:
+                world.apply_force(second[-1], (5.0, 0.0, 0.0))
+            world.step(1)
+            pairs, impulse = world.listed_pairs()
+            impulses = {(int(a), int(b)): j.tobytes() for (a, b), j in zip(pairs, impulse)}
+            states.append([a.tobytes() for a in world.state] + [sorted(impulses.items())])
+            sleeping.append(world.sleeping().copy())
+        runs[sleep] = states, np.array(sleeping)
+    (states, sleeping), (states_awake, _) = runs[True], runs[False]
+    for t, (one, other) in enumerate(zip(states, states_awake)):
+        assert one == other, f"step {t}"
+    struck = 2 + int(np.argmin(sleeping[2:, first[0]]))  # the first step the stack wakes
+    assert 40 < struck < 200 and sleeping[2:struck, first].all()  # asleep until the ball
+    assert not sleeping[struck, first].any()  # bottom to top, at once
+    assert sleeping[2:300, second].all() and not sleeping[300:310, second].any()  # pushed
+
+
+def test_a_slow_island_is_stopped_by_sleep_speed_and_sleeps_until_struck():
+    """A 10-box pyramid moves by round-off (~1e-17 m a step), so it is no exact fixed point and
+    never sleeps by default. With sleep_speed its island is stopped once every box has been
+    slower than that for SLEEP_TIME (0.5 s), and then holds its pose bit for bit, until a
+    ball rolling into it wakes the whole island."""
+    scene = pyramid(4)
+    ball = scene.add_body(rg.Sphere(0.03), mass=0.2, friction=0.5, position=(-2.0, 0.0, 0.03),
+                          velocity=(1.0, 0.0, 0.0))
+    boxes = list(range(1, ball))
+    sleeping = {}
+    for speed in (0.0, 0.01):
+        world = rg.World(scene, config=rg.SolverConfig.for_scene(scene, sleep_speed=speed))
+        asleep, poses = [], []
+        for _ in range(720):
+            world.step(1)
+            asleep.append(world.sleeping()[boxes].all())
+            poses.append(world.position[boxes].copy())
+        sleeping[speed] = np.array(asleep)
+    assert not sleeping[0.0].any()
+    stopped = int(np.argmax(sleeping[0.01]))
+    assert 120 <= stopped < 360  # at least SLEEP_TIME (0.5 s = 120 steps) after the start
+    woken = stopped + int(np.argmin(sleeping[0.01][stopped:]))
+    assert stopped < woken < 720 and sleeping[0.01][stopped:woken].all()
+    assert all(np.array_equal(poses[stopped], poses[t]) for t in range(stopped, woken))
+    assert world.position[ball, 0] < 0.0  # the ball was stopped by the pyramid it woke
 
 
 def test_a_sleeping_cube_reports_its_weight_as_the_support_impulse():

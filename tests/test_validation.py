@@ -157,6 +157,10 @@ def test_bad_solver_config_is_rejected():
         rg.SolverConfig(rotation_order=4)
     with pytest.raises(ValueError, match="unknown option"):
         rg.SolverConfig.for_scene(rg.Scene(), rotation_ordr=2)
+    with pytest.raises(ValueError, match=r"sleep_speed: must be finite and in \[0, 10\]"):
+        rg.SolverConfig(sleep_speed=-0.1)
+    with pytest.raises(ValueError, match="sleep_speed: expected a number of m/s, got True"):
+        rg.SolverConfig(sleep_speed=True)
 
 
 @pytest.mark.parametrize("check, message", [

@@ -60,6 +60,7 @@ Settings read_settings(const nb::dict& s) {
     out.sweep = item<bool>(s, "sweep");
     out.broad_phase = item<bool>(s, "broad_phase");
     out.sleep = item<bool>(s, "sleep");
+    out.sleep_speed = item<double>(s, "sleep_speed");
     out.detect_every_pass = item<bool>(s, "detect_every_pass");
     out.keep_energy = item<bool>(s, "keep_energy");
     out.overlap_correction = item<double>(s, "overlap_correction");
