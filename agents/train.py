@@ -196,6 +196,9 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     folder = run_directory(out, env_id, algo, seed)
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "result.json").unlink(missing_ok=True)  # a result only once the run finished
+    if resume is None:  # a new run: no checkpoint of an earlier one in this folder is its own
+        shutil.rmtree(folder / "checkpoints", ignore_errors=True)
+        (folder / "selected_model.zip").unlink(missing_ok=True)
     if resume is not None:
         record = _restore_files(Path(resume), folder, env_id, algo, seed)
         # the checkpoint's model is of its learner, its buffer of its number of envs
@@ -264,7 +267,7 @@ def finish(folder: Path, model, clock: Clock, episodes: int = 100,
     candidates = sorted((int(path.name.split("_")[1]), path)
                         for path in folder.glob("checkpoints/step_*")
                         if path.name.split("_")[1].isdigit() and (path / "model.zip").is_file()
-                        and int(path.name.split("_")[1]) >= SELECT_FROM * steps)
+                        and SELECT_FROM * steps <= int(path.name.split("_")[1]) <= steps)
     if candidates:
         note(f"{env_id}: choosing among {len(candidates)} checkpoints, "
              f"{VALIDATION_EPISODES} validation episodes each", progress)

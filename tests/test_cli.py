@@ -193,6 +193,18 @@ def test_train_resumes_from_the_newest_checkpoint(tmp_path, capsys):
     assert (checkpoint.parent / "step_144" / "replay_buffer.pkl").is_file()
 
 
+def test_a_new_run_in_a_used_folder_chooses_only_among_its_own_checkpoints(tmp_path, capsys):
+    """Training again into a run folder starts afresh: the earlier run's checkpoints (here of
+    144 env steps, more than the new run's 96) are not candidates for its policy."""
+    common = ["train", "rigid_gym/Push-v0", "--out", str(tmp_path), "--eval-freq", "0",
+              "--final-episodes", "1"]
+    assert main([*common, "--steps", "144", "--checkpoint-freq", "48"]) == 0
+    assert main([*common, "--steps", "96"]) == 0
+    assert "the policy of 96 env steps" in capsys.readouterr().err
+    folder = tmp_path / "Push-sac-seed0"
+    assert not (folder / "checkpoints").exists() and not (folder / "selected_model.zip").exists()
+
+
 @pytest.mark.parametrize("args, message", [
     (["train", "rigid_gym/Push-v0", "--resume", "--out", "/nonexistent/runs"],
      "--resume: no checkpoint in /nonexistent/runs/Push-sac-seed0/checkpoints"),
