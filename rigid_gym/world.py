@@ -361,7 +361,9 @@ class World:
         A stage with nothing to do in a step is not run (no listed pair: no collision, contact
         or shock stage); the broad phase runs once per step where the config lists pairs, and
         a step whose impulses sped a body past its box runs the impulse stages again (their
-        calls count it, the relisting is the broad phase's time)."""
+        calls count it, the relisting is the broad phase's time). A step of a world at rest
+        (every dynamic body asleep and nothing changed since the last step) runs no stage:
+        its check is the broad phase's time."""
         on = self.config.phases(bool(np.any(self.model.gravity)))
         seconds = self.core.stage_seconds.sum(axis=0)
         calls = self.core.stage_calls.sum(axis=0)

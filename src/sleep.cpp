@@ -38,6 +38,29 @@ bool unchanged(const BodyStates& bodies, int i, Span<const double> snapshot) {
     return same;
 }
 
+// Does a force or torque act on body i in this step? (-0.0 counts as none, as for the sum.)
+bool pushed(const BodyStates& bodies, int i) {
+    const Vec3 f = bodies.force[i], t = bodies.torque[i];
+    return f.x != 0.0 || t.x != 0.0 || f.y != 0.0 || t.y != 0.0 || f.z != 0.0 || t.z != 0.0;
+}
+
+// Each dynamic body's time below Settings::sleep_speed (|V| + |omega| reach, the fastest any
+// of its points can move) after a step of dt s, counted from zero again in an island that
+// was disturbed (rest.slow clear).
+void count_slow_time(WorldStep& w, double dt) {
+    const BodyStates& s = w.bodies;
+    const Rest& rest = w.rest;
+    const double sleep_speed = w.settings->sleep_speed;
+    for (int i = 0; i < w.num_bodies(); ++i) {
+        if (w.model.motion[i] == DYNAMIC) {
+            const double speed =
+                length(s.velocity[i]) + length(s.angular_velocity[i]) * w.body_reach[i];
+            rest.slow_time[i] =
+                rest.slow[rest.island[i]] && speed < sleep_speed ? rest.slow_time[i] + dt : 0.0;
+        }
+    }
+}
+
 Span<const double> snapshot_of(const Rest& rest, int i) {
     const Span<double> row = rest.snapshot.sub(static_cast<int64_t>(i) * SNAPSHOT, SNAPSHOT);
     return {row.data, row.size};
@@ -98,25 +121,16 @@ Vec3 previous_impulse(const Rest& rest, int64_t key) {
     return {0.0, 0.0, 0.0};  // not reached: an island with a new pair is awake
 }
 
-// With Settings::sleep_speed: each dynamic body's time below it (|V| + |omega| reach, the
-// fastest any of its points can move), reset in an island that is disturbed (rest.slow
-// clear); an undisturbed island whose every body has been that slow for SLEEP_TIME is
-// stopped, its velocities zeroed, and sleeps (rest.slow stays set only for those, and for the
-// exact fixed points of rest.resting).
+// With Settings::sleep_speed: each dynamic body's time below it counted (count_slow_time);
+// an undisturbed island whose every body has been that slow for SLEEP_TIME is stopped, its
+// velocities zeroed, and sleeps (rest.slow stays set only for those, and for the exact fixed
+// points of rest.resting).
 void stop_slow_islands(WorldStep& w, double dt) {
     const BodyStates& s = w.bodies;
     const Span<const int32_t> motion = w.model.motion;
     const Rest& rest = w.rest;
     const int n = w.num_bodies();
-    const double sleep_speed = w.settings->sleep_speed;
-    for (int i = 0; i < n; ++i) {
-        if (motion[i] != DYNAMIC) {
-            continue;
-        }
-        const int64_t r = rest.island[i];
-        const double speed = length(s.velocity[i]) + length(s.angular_velocity[i]) * w.body_reach[i];
-        rest.slow_time[i] = rest.slow[r] && speed < sleep_speed ? rest.slow_time[i] + dt : 0.0;
-    }
+    count_slow_time(w, dt);
     for (int i = 0; i < n; ++i) {
         if (motion[i] == DYNAMIC && rest.slow_time[i] < SLEEP_TIME) {
             rest.slow[rest.island[i]] = 0;
@@ -160,10 +174,7 @@ void mark_asleep(WorldStep& w, int64_t count, double dt) {
             continue;
         }
         const int64_t r = rest.island[i];
-        const Vec3 f = s.force[i], t = s.torque[i];
-        const bool pushed = f.x != 0.0 || t.x != 0.0 || f.y != 0.0 || t.y != 0.0 || f.z != 0.0 ||
-                            t.z != 0.0;
-        if (rest.previous_island[i] != r || w.attached.parent[i] >= 0 || pushed) {
+        if (rest.previous_island[i] != r || w.attached.parent[i] >= 0 || pushed(s, i)) {
             rest.slow[r] = 0;
         }
         if (rest.resting[r] && !unchanged(s, i, snapshot_of(rest, i))) {
@@ -189,8 +200,10 @@ void mark_asleep(WorldStep& w, int64_t count, double dt) {
             rest.slow[i] = rest.resting[i];
         }
     }
+    bool all_asleep = true;
     for (int i = 0; i < n; ++i) {
         rest.asleep[i] = motion[i] == DYNAMIC && rest.slow[rest.island[i]];
+        all_asleep &= motion[i] != DYNAMIC || rest.asleep[i];
         if (motion[i] != DYNAMIC || !rest.resting[rest.island[i]]) {
             // a fixed point's snapshot is its state, just compared; a stopped body's is new
             read_state(s, i, rest.snapshot.sub(static_cast<int64_t>(i) * SNAPSHOT, SNAPSHOT));
@@ -205,6 +218,22 @@ void mark_asleep(WorldStep& w, int64_t count, double dt) {
                                                        w.lists.pair_b[k]);
     }
     *rest.awake_pairs = awake;
+    *rest.at_rest = all_asleep;
+}
+
+bool still_at_rest(WorldStep& w, double dt) {
+    const Rest& rest = w.rest;
+    if (!*rest.at_rest) {
+        return false;
+    }
+    bool same = true;
+    for (int i = 0; i < w.num_bodies(); ++i) {
+        same &= unchanged(w.bodies, i, snapshot_of(rest, i)) && !pushed(w.bodies, i);
+    }
+    if (same && w.settings->sleep_speed > 0.0) {
+        count_slow_time(w, dt);  // every island undisturbed: rest.slow is still set for each
+    }
+    return same;
 }
 
 int64_t move_asleep_last(WorldStep& w, int64_t count) {
@@ -245,6 +274,7 @@ void wake_world(WorldStep& w, int64_t count) {
         w.rest.previous_island[i] = -1;
     }
     *w.rest.awake_pairs = count;
+    *w.rest.at_rest = 0;
 }
 
 }  // namespace rg

@@ -52,6 +52,16 @@ constexpr double SLEEP_TIME = 0.5;
 // keep this step's islands and states for the next.
 void mark_asleep(WorldStep& w, int64_t count, double dt);
 
+// At the start of a step of dt s, before anything else: is the world still at rest? Every
+// dynamic body slept through the last step (Rest::at_rest), and no body's state changed
+// since that step began, no force or torque acts (an attachment or a change from Python
+// forgets the world: StepContext::forget). Then each island is the fixed point of the
+// argument above and the step would change nothing: not the states, the listed pairs, their
+// order or impulses. The caller skips the step whole; this only counts each body's time
+// below Settings::sleep_speed on, as the step would. Its cost is the comparison of each
+// body's state with its snapshot.
+bool still_at_rest(WorldStep& w, double dt);
+
 // Reorder the count pairs: those without an asleep body first, then those with one, each in
 // their order; returns how many are awake.
 int64_t move_asleep_last(WorldStep& w, int64_t count);

@@ -115,6 +115,10 @@ int64_t step_world(WorldStep& w, int64_t steps, double dt) {
     const int64_t capacity = w.pair_capacity();
     double since = start_timing(w.timers);
     for (int64_t done = 0; done < steps; ++done) {
+        if (c.sleep && still_at_rest(w, dt)) {  // nothing to do (sleep.h); not a stage's run
+            since = lap(w.timers, BROAD_STAGE, since, 0);
+            continue;
+        }
         // 0. broad phase: every pair whose boxes may meet within this step (velocities
         //    included); held bodies are put at their place first. Counted as a run only when
         //    it lists pairs (SolverConfig.phases)

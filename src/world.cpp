@@ -180,6 +180,7 @@ StepContext::StepContext(int num_worlds, Geometry geometry, std::vector<int32_t>
     snapshot_.assign(b * n * SNAPSHOT, 0.0);
     previous_count_.assign(b, 0);
     previous_awake_.assign(b, 0);
+    at_rest_.assign(b, 0);
     allocate_pairs(std::max<int64_t>(8, 2 * n));
     contacts_.allocate_rows(num_worlds_, 8 * pair_capacity_);
 }
@@ -227,6 +228,9 @@ void StepContext::forget(int first, int last) {
          k < static_cast<int64_t>(last) * num_bodies_; ++k) {
         previous_island_[k] = -1;
     }
+    for (int w = first; w < last; ++w) {
+        at_rest_[w] = 0;
+    }
 }
 
 WorldStep StepContext::world(int w) {
@@ -267,7 +271,8 @@ WorldStep StepContext::world(int w) {
               world_rows(resting_, w, n),         world_rows(slow_, w, n),
               world_rows(slow_time_, w, n),       world_rows(snapshot_, w, n * SNAPSHOT),
               world_rows(previous_keys_, w, p),   world_rows(previous_impulse_, w, p),
-              &previous_count_[w],                &previous_awake_[w]};
+              &previous_count_[w],                &previous_awake_[w],
+              &at_rest_[w]};
     s.timers = {world_rows(stage_seconds, w, STAGE_COUNT), world_rows(stage_calls, w, STAGE_COUNT),
                 timed};
     return s;

@@ -81,6 +81,7 @@ struct Rest {
     Span<Vec3> previous_impulse;      // (P,) N s, their impulses
     int64_t* previous_count;          // how many pairs the last step listed
     int64_t* previous_awake;          // how many of them (the first) were awake
+    int64_t* at_rest;                 // 1: every dynamic body slept through the last step
 };
 
 // Contacts found once per step (contacts.h): per listed pair (P,) and a pool of rows (Q,).
@@ -245,7 +246,8 @@ private:
     GraphBuffers graph_;
     // sleeping
     Array<int64_t> awake_pairs_, island_, previous_island_, island_bodies_, island_pairs_,
-        previous_bodies_, previous_pairs_, previous_keys_, previous_count_, previous_awake_;
+        previous_bodies_, previous_pairs_, previous_keys_, previous_count_, previous_awake_,
+        at_rest_;
     Array<uint8_t> resting_, slow_;
     Array<double> slow_time_;
     Array<double> snapshot_;

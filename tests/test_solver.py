@@ -457,6 +457,56 @@ def test_resting_stacks_sleep_as_islands_and_wake_as_one():
     assert sleeping[2:300, second].all() and not sleeping[300:310, second].any()  # pushed
 
 
+def resting_world_scene():
+    """A settled 5-cube stack and, apart from it, a resting kinematic pad."""
+    scene = scenes.cube_stack(5)
+    scene.add_body(rg.Box((0.06, 0.06, 0.02)), kinematic=True, position=(1.0, 0.0, 0.3),
+                   name="pad")
+    return scene
+
+
+WAKE_UPS = {
+    "state written": lambda world, top: world.state.position.__setitem__((0, top, 0), 1e-9),
+    "force": lambda world, top: world.apply_force(top, (1.0, 0.0, 0.0)),
+    "torque": lambda world, top: world.apply_torque(top, (0.0, 0.0, 0.01)),
+    "new mass": lambda world, top: world.set_material(top, mass=2.0),
+    "kinematic moving": lambda world, top: world.set_velocity(world.body_index("pad"),
+                                                              (0.1, 0.0, 0.0)),
+}
+
+
+@pytest.mark.parametrize("wake_up", WAKE_UPS)
+def test_a_world_at_rest_skips_its_steps_until_anything_changes(wake_up):
+    """Once every dynamic body sleeps and nothing changes, a step runs no stage (the profile
+    counts no broad phase). Each change from outside ends that: a write into the state
+    arrays, a force, a torque, a new mass, a kinematic body set moving. Every state and pair
+    impulse is bit-identical to stepping with sleeping off, and the change takes effect in
+    the step right after it."""
+    scene = resting_world_scene()
+    top = 5
+    config = rg.SolverConfig.for_scene(scene)
+    runs = {}
+    for sleep in (True, False):
+        world = rg.World(scene, config=dataclasses.replace(config, sleep=sleep))
+        states, broad = [], []
+        for t in range(80):
+            if t == 50:
+                WAKE_UPS[wake_up](world, top)
+            world.step(1)
+            pairs, impulse = world.listed_pairs()
+            impulses = {(int(a), int(b)): j.tobytes() for (a, b), j in zip(pairs, impulse)}
+            states.append([a.tobytes() for a in world.state] + [sorted(impulses.items())])
+            broad.append(world.profile()["broad_phase"]["calls"])
+        runs[sleep] = states, np.diff(broad)
+    (states, broad), (states_awake, broad_awake) = runs[True], runs[False]
+    for t, (one, other) in enumerate(zip(states, states_awake)):
+        assert one == other, f"step {t}"
+    assert (broad_awake == 1).all()
+    assert not broad[10:49].any()  # at rest: no stage ran
+    assert broad[49] == 1  # the step after the change ran the broad phase
+    assert states[50] != states[48]  # and the change showed
+
+
 def test_a_slow_island_is_stopped_by_sleep_speed_and_sleeps_until_struck():
     """A 10-box pyramid moves by round-off (~1e-17 m a step), so it is no exact fixed point and
     never sleeps by default. With sleep_speed its island is stopped once every box has been

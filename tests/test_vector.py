@@ -15,12 +15,14 @@ from rigid_gym.report.scenes import cube_stack, pile
 TASK_IDS = [i for i in ENV_IDS if "Dense" not in i]
 
 
-@pytest.mark.parametrize("scene", [cube_stack(5), pile(30)], ids=["stack", "pile"])
-def test_timed_steps_in_chunks_equal_one_untimed_call(scene):
+@pytest.mark.parametrize("scene, rests", [(cube_stack(5), True), (pile(30), False)],
+                         ids=["stack", "pile"])
+def test_timed_steps_in_chunks_equal_one_untimed_call(scene, rests):
     """World.step(n) runs n whole steps in one call of the core, which counts its stages and,
     with profile=True, times them as it goes. Timing and splitting the steps into calls with
     the profile read between them change nothing: the same bits, batched or not (a pile
-    exercises pair-buffer growth, relisting, shock levels and side contacts)."""
+    exercises pair-buffer growth, relisting, shock levels and side contacts). The broad phase
+    runs in every step, except in the steps of a world at rest (the settled stack)."""
     for num_worlds in (None, 3):
         fused = rg.World(scene, dt=1 / 240, num_worlds=num_worlds)
         timed = rg.World(scene, dt=1 / 240, num_worlds=num_worlds, profile=True)
@@ -33,7 +35,8 @@ def test_timed_steps_in_chunks_equal_one_untimed_call(scene):
             seconds = total
         for name in ("position", "orientation", "velocity", "angular_velocity"):
             np.testing.assert_array_equal(getattr(fused, name), getattr(timed, name))
-        assert fused.profile()["broad_phase"]["calls"] == 150 * (num_worlds or 1)
+        broad = fused.profile()["broad_phase"]["calls"]
+        assert broad < 150 * (num_worlds or 1) if rests else broad == 150 * (num_worlds or 1)
         assert {n: p["calls"] for n, p in fused.profile().items()} == {
             n: p["calls"] for n, p in timed.profile().items()}
 
