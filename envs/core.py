@@ -30,12 +30,14 @@ from rigid_gym.envs.task import (
     CUBE_MASS,
     FRICTION,
     GRIPPER_START,
+    SOLVER_SETTINGS,
     SOLVER_STEPS,
     STEP_TIME,
     Task,
     sparse_reward,
 )
 
+from rigid_gym.config import SolverConfig
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Box
 from rigid_gym.world import World
@@ -123,7 +125,8 @@ class TaskBatch:
         self.scene = scene
         # compiles the scene's geometry: ~4 ms
         self.world = World(scene, dt=STEP_TIME / SOLVER_STEPS,
-                           num_worlds=self.num_worlds if self.batched else None)
+                           num_worlds=self.num_worlds if self.batched else None,
+                           config=SolverConfig.for_scene(scene, **SOLVER_SETTINGS))
         self.gripper = SuctionGripper(self.world, self.gripper_body, self.cubes,
                                       [(h, h, h) for h in half.tolist()], STEP_TIME, Workspace())
         bodies = {PAD: self.gripper_body} | {f"cube{k}": c for k, c in enumerate(self.cubes)}

@@ -32,7 +32,7 @@ struct Settings {
     double sleep_speed = 0.0;  // sleep.h: m/s under which a slow island is stopped; 0: exact only
     bool detect_every_pass = false;  // contacts.h: the narrow phase in every pass
     bool keep_energy = true;   // integrate.h: rotation update put back on the body's energy
-    double overlap_correction = 0.2;  // overlap.h: fraction of excess overlap removed per step
+    double overlap_correction = 1.0;  // overlap.h: fraction of excess overlap removed per step
     double gravity = 0.0;      // |g|, m/s^2
     Vec3 up = {0.0, 0.0, 1.0};  // unit vector against gravity
 };
