@@ -403,6 +403,77 @@ def mass_range(scale: float) -> list[StiffResult]:
                          scene, 10 * scale)]
 
 
+SLEEP_SPEED = 0.01
+"""m/s: the stopping threshold the sleeping case measures (SolverConfig.sleep_speed)."""
+TOUCH = 1e-3
+"""m: the ball touches a box once they are this close (contacts stop a body short of its
+partner by up to |g| dt^2, the speculative gap, so a resolved touch need not overlap)."""
+
+
+def _first(flags: list[bool], start: int = 0) -> int:
+    """Index of the first true flag from ``start`` on, or len(flags)."""
+    return next((k for k in range(start, len(flags)) if flags[k]), len(flags))
+
+
+def sleeping(scale: float) -> list[StiffResult]:
+    """What sleeping changes. Exact sleeping (the default) on the 10-cube stack, a bit-exact
+    fixed point, against stepping every body, 10 s x scale. Stopping slow islands
+    (sleep_speed = SLEEP_SPEED) on the 55-box pyramid, which round-off keeps moving: how far
+    the stop leaves the boxes from where exact stepping has them, how far they move while
+    asleep, and how many steps after a ball rolling into the pyramid first touches it (comes
+    within TOUCH) the island is still asleep."""
+    stack = scenes.cube_stack(10)
+    on = rg.World(stack, dt=1 / 240)
+    off = rg.World(stack, dt=1 / 240, config=rg.SolverConfig.for_scene(stack, sleep=False))
+    for world in (on, off):
+        world.step(round(10 * scale * 240))
+    exact_gap = float(np.abs(on.position - off.position).max())
+    scene = scenes.pyramid(10)
+    ball = scene.add_body(rg.Sphere(0.03), mass=0.2, friction=0.5, position=(-1.5, 0.0, 0.03),
+                          velocity=(1.0, 0.0, 0.0))
+    boxes = np.arange(1, ball)
+    stopping = rg.World(scene, dt=1 / 240, config=rg.SolverConfig.for_scene(
+        scene, sleep_speed=SLEEP_SPEED))
+    exact = rg.World(scene, dt=1 / 240)
+    asleep, touched, poses, exact_poses = [], [], [], []
+    for _ in range(round(3.0 / stopping.dt)):
+        stopping.step()
+        exact.step()
+        contacts = stopping.contacts(margin=TOUCH)
+        partner = np.where(contacts.body_a == ball, contacts.body_b,
+                           np.where(contacts.body_b == ball, contacts.body_a, -1))
+        asleep.append(bool(stopping.sleeping()[boxes].all()))
+        touched.append(bool(np.isin(partner, boxes).any()))
+        poses.append(stopping.position[boxes].copy())
+        exact_poses.append(exact.position[boxes].copy())
+    stopped, touch = _first(asleep), _first(touched)
+    woken = _first([not a for a in asleep], stopped)
+    if not stopped < min(touch, woken) < len(asleep):
+        raise RuntimeError(f"sleeping case: the pyramid should stop (step {stopped}) before the "
+                           f"ball touches it ({touch}) or wakes it ({woken}) within 3 s")
+    before = min(touch, woken) - 1
+    moved = float(np.abs(poses[before] - exact_poses[before]).max())
+    drift = float(np.abs(np.array(poses[stopped:before + 1]) - poses[stopped]).max())
+    late = max(0, woken - touch)  # the ball's pair is listed a few steps before the touch
+    checks = [
+        Check("stack, sleeping on vs off: largest position difference", exact_gap, 0.0, "m",
+              "a bit-exact fixed point is skipped exactly: no bit may change"),
+        Check(f"pyramid stopped at {SLEEP_SPEED:g} m/s: distance from exact stepping", moved,
+              DRIFT_BOUND, "m", "stopping may move a resting configuration no further than it "
+              "may drift"),
+        Check("pyramid asleep: drift", drift, 0.0, "m",
+              "a stopped island is a fixed point of the step"),
+        Check("steps the island sleeps on after the ball's first touch", float(late), 0.0,
+              "steps", "a touch wakes the island no later than the step it happens")]
+    rows = [["stack, exact sleeping", f"{exact_gap:.3g}", "—", "—"],
+            [f"pyramid, stopped at {SLEEP_SPEED:g} m/s after {stopped / 240:.2f} s",
+             f"{moved:.3g}", f"{drift:.3g}", f"{late} (woken {touch - woken} steps before)"]]
+    return [StiffResult("sleeping", "sleeping: exact on a stack, stopping slow islands on a "
+                        "pyramid", checks, float("nan"), {},
+                        (["scene", "difference from stepping every body (m)",
+                          "drift asleep (m)", "steps asleep after the touch"], rows))]
+
+
 def big_pile(scale: float) -> list[StiffResult]:
     """1000 boxes, spheres and capsules (5 cm) dropped into a pit, 2 s (quick: 100, 0.1 s):
     finite, no energy growth, overlap under 2% of the 4 cm thinnest body."""
@@ -415,7 +486,7 @@ def big_pile(scale: float) -> list[StiffResult]:
 
 CASES: tuple[Callable[[float], list[StiffResult]], ...] = (
     towers, pyramid, heavy_on_light, fast_spinner, thin_rod, elastic, friction_extremes,
-    tunnelling, dt_range, drop_and_settle, mass_range, big_pile)
+    tunnelling, dt_range, drop_and_settle, mass_range, sleeping, big_pile)
 """Every stiff/extreme case: (scale) -> results; scale 1 is the full report, < 1 shortens
 runs (the quick report)."""
 
