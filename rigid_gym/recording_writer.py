@@ -442,13 +442,17 @@ class _File:
 
     def close(self) -> None:
         """Write the file (its chunks, then rerun's footer), making its folder again if it
-        has gone since the file was opened, then the layout beside it. Raises an OSError
-        where the file cannot be made."""
+        has gone since the file was opened, then the layout beside it. The chunks go to a
+        hidden file beside it that is then renamed to the file's name, so that the name only
+        ever holds a whole file: a reader never opens a half-written one, and a writer killed
+        while writing leaves the hidden part, not a truncated ``.rrd`` that no reader can
+        open. Raises an OSError where the file cannot be made."""
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.path.open("wb").close()  # rerun's own error would name neither the file nor errno
+        part = self.path.with_name(f".{self.path.name}.part")
+        part.open("wb").close()  # rerun's own error would name neither the file nor errno
         ChunkStore.from_chunks(self.chunks).write_rrd(
-            self.path, application_id=self.layout.application_id,
-            recording_id=self.recording_id)
+            part, application_id=self.layout.application_id, recording_id=self.recording_id)
+        os.replace(part, self.path)
         self.chunks = []
         self.layout.blueprint_beside(self.path)
 
