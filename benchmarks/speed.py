@@ -3,8 +3,8 @@
 1. Solver (``--only solver``): steps/s at dt = 1/240, one world, for the scenes of
    ``rigid_gym.report.scenes``: settled, the 10-cube stack, the 55-box pyramid and piles of
    10, 100 and 1000 mixed bodies; falling, the piles of 10 and 100 in the first second after
-   their drop. Every engine (ours, and MuJoCo without and with its island sleeping and
-   PyBullet through ``rigid_gym.report.peers`` when the ``compare`` extra is installed: ``pip
+   their drop. Every engine (ours, and ours stopping slow islands (``--sleep-speed``,
+   SolverConfig.sleep_speed), MuJoCo without and with its island sleeping, and PyBullet through ``rigid_gym.report.peers`` when the ``compare`` extra is installed: ``pip
    install -e ".[compare]"``) builds every scene and runs a settled scene's ``settle`` steps;
    then each of ``--repeats`` rounds times ``step(steps)`` of every scene and engine in turn,
    a falling scene's after a reset to its start. A rate is the median over
@@ -36,7 +36,7 @@ at most ``RIGID_GYM_NUM_THREADS``).
     python benchmarks/speed.py --only solver     # one section: solver, envs or batched
     python benchmarks/speed.py --quick           # smoke run with small counts, about 15 s
     python benchmarks/speed.py --repeats 9       # more timings per median (default 5)
-    python benchmarks/speed.py --sleep-speed 0.01  # ours stopping slow islands too
+    python benchmarks/speed.py --sleep-speed 0.05  # the threshold of ours, sleeping
 """
 
 import argparse
@@ -64,12 +64,20 @@ DT = 1 / 240
 STACK_SECONDS = 10.0
 """Simulated time over which the stack's top cube is watched, s."""
 STACK_BAR_MM = 1.0
-PEERS = {"MuJoCo": ("mujoco", peers.MuJoCoWorld),
-         "MuJoCo, sleep on": ("mujoco", functools.partial(peers.MuJoCoWorld, sleep=True)),
-         "PyBullet": ("pybullet", peers.PyBulletWorld)}
-"""Peer label -> (module name as in ``peers.available``, world class (scene, dt)). MuJoCo
-sleeps resting islands only with ``mjENBL_SLEEP`` on, which a user turns on for speed."""
-ENGINES = ("ours", *PEERS)
+OURS, OURS_SLEEPING = "ours", "ours, sleeping"
+"""Ours by default (exact sleeping only), and with slow islands stopped and put to sleep
+(SolverConfig.sleep_speed = ``--sleep-speed``): both opt-in choices of speed over exactness
+side by side, as MuJoCo's with its sleep flag on."""
+PEERS = {"MuJoCo": ("mujoco", peers.MuJoCoWorld, OURS),
+         "MuJoCo, sleep on": ("mujoco", functools.partial(peers.MuJoCoWorld, sleep=True),
+                              OURS_SLEEPING),
+         "PyBullet": ("pybullet", peers.PyBulletWorld, OURS)}
+"""Peer label -> (module name as in ``peers.available``, world class (scene, dt), the ours it
+is compared with). MuJoCo sleeps resting islands only with ``mjENBL_SLEEP`` on, which a user
+turns on for speed; ours stops slow islands only with SolverConfig.sleep_speed above 0."""
+ENGINES = (OURS, OURS_SLEEPING, *PEERS)
+SLEEP_SPEED = 0.01
+"""m/s: ``--sleep-speed``'s default, the SolverConfig.sleep_speed of ours, sleeping."""
 BATCH_SIZES = (1, 16, 256, 1024)
 QUICK_BATCH_SIZES = (1, 16)
 SCRIPTED_BATCHED = "rigid_gym/Push-v0"
@@ -140,14 +148,13 @@ def dynamic_bodies(scene: rg.Scene) -> int:
     return sum(body.motion == DYNAMIC for body in scene.bodies)
 
 
-def build(engine: str, scene: rg.Scene, sleep_speed: float = 0.0):
+def build(engine: str, scene: rg.Scene, sleep_speed: float = SLEEP_SPEED):
     """A world of ``engine`` (one of ENGINES) for ``scene``, or why a peer has none (str);
-    ours stops islands slower than ``sleep_speed`` (m/s, SolverConfig.sleep_speed; 0: only
-    exact sleeping, the default)."""
-    if engine == "ours":
-        return rg.World(scene, dt=DT, config=rg.SolverConfig.for_scene(scene,
-                                                                        sleep_speed=sleep_speed))
-    module, world_class = PEERS[engine]
+    ours, sleeping, stops islands slower than ``sleep_speed`` (m/s, SolverConfig.sleep_speed)."""
+    if engine in (OURS, OURS_SLEEPING):
+        speed = sleep_speed if engine == OURS_SLEEPING else 0.0
+        return rg.World(scene, dt=DT, config=rg.SolverConfig.for_scene(scene, sleep_speed=speed))
+    module, world_class, _ = PEERS[engine]
     if not peers.available()[module]:
         return 'not installed (pip install -e ".[compare]")'
     try:
@@ -213,7 +220,7 @@ def timed_rates(scenes, repeats: int, sleep_speed: float) -> tuple[dict, dict]:
                 continue
             if name.endswith("stack"):  # the top cube
                 moved[name, engine] = moved_mm(world, len(scene.bodies) - 1, STACK_SECONDS)
-            if engine != "ours":
+            if engine not in (OURS, OURS_SLEEPING):
                 world.close()
     return rates, moved
 
@@ -228,12 +235,15 @@ def rate_cells(ours: list, peer) -> str:
 
 
 def print_solver_table(rates: dict, scenes) -> None:
-    print("| scene | bodies | ours | " + " | ".join(f"{p} | ours/{p}" for p in PEERS) + " |")
-    print("|---|---|---|" + "---|---|" * len(PEERS))
+    print(f"| scene | bodies | {OURS} | {OURS_SLEEPING} | "
+          + " | ".join(f"{p} | {ours}/{p}" for p, (_, _, ours) in PEERS.items()) + " |")
+    print("|---|---|---|---|" + "---|---|" * len(PEERS))
     for name, scene, _, _ in scenes:
-        ours = rates[name, "ours"]
-        print(f"| {name} | {dynamic_bodies(scene)} | {rate_text(statistics.median(ours))} | "
-              + " | ".join(rate_cells(ours, rates[name, p]) for p in PEERS) + " |")
+        print(f"| {name} | {dynamic_bodies(scene)} | "
+              f"{rate_text(statistics.median(rates[name, OURS]))} | "
+              f"{rate_text(statistics.median(rates[name, OURS_SLEEPING]))} | "
+              + " | ".join(rate_cells(rates[name, ours], rates[name, p])
+                           for p, (_, _, ours) in PEERS.items()) + " |")
 
 
 def print_stack_health(rates: dict, moved: dict, name: str) -> None:
@@ -244,7 +254,7 @@ def print_stack_health(rates: dict, moved: dict, name: str) -> None:
     for engine in ENGINES:
         cell = f"{moved[name, engine]:.3g}" if (name, engine) in moved else rates[name, engine]
         print(f"| {engine} | {cell} |")
-    ours = moved[name, "ours"]
+    ours = moved[name, OURS]
     print(f"\nbar {'met' if ours < STACK_BAR_MM else 'NOT met'}: ours moved {ours:.3g} mm")
 
 
@@ -275,14 +285,14 @@ def print_pile_growth(rates: dict, scenes) -> None:
               + " | ".join(f"{t:.2f}" for t in per_step / counts) + f" | {k:.2f} |")
 
 
-def solver_section(quick: bool, repeats: int, sleep_speed: float = 0.0) -> None:
+def solver_section(quick: bool, repeats: int, sleep_speed: float = SLEEP_SPEED) -> None:
     scenes = solver_scenes(quick)
-    sleeping = (f"islands slower than {sleep_speed:g} m/s for 0.5 s stopped and asleep "
-                "(SolverConfig.sleep_speed)" if sleep_speed > 0.0 else
-                "exact sleeping only (SolverConfig's default)")
     print(f"\nSolver steps/s, dt = 1/240, one world (median of {repeats} timings after "
           "settling, every engine and scene timed in turn in each repeat; ratios are the "
-          f"median over repeats of ours / theirs); ours: {sleeping}\n")
+          f"median over repeats of ours / theirs). {OURS}: exact sleeping only "
+          f"(SolverConfig's default); {OURS_SLEEPING}: islands slower than {sleep_speed:g} m/s "
+          "for 0.5 s stopped and asleep too (SolverConfig.sleep_speed), compared with MuJoCo "
+          "with its sleep on\n")
     rates, moved = timed_rates(scenes, repeats, sleep_speed)
     print_solver_table(rates, scenes)
     print_stack_health(rates, moved, "10-cube stack")
@@ -365,8 +375,9 @@ def main() -> None:
     parser.add_argument("--only", choices=["solver", "envs", "batched"])
     parser.add_argument("--quick", action="store_true", help="small counts: a smoke run")
     parser.add_argument("--repeats", type=int, default=5, help="timings per median")
-    parser.add_argument("--sleep-speed", type=float, default=0.0,
-                        help="ours: SolverConfig.sleep_speed, m/s (default 0: exact sleeping)")
+    parser.add_argument("--sleep-speed", type=float, default=SLEEP_SPEED,
+                        help="ours, sleeping: SolverConfig.sleep_speed, m/s (default "
+                             f"{SLEEP_SPEED:g})")
     parser.add_argument("--out", type=Path, default=None,
                         help="also write the tables to this markdown file (README quotes "
                              "docs/benchmarks.md, written by a whole run)")
