@@ -32,19 +32,17 @@ RECIPES = {
 ``algos``): SAC + HER (Push, Throw with demonstrations, Stack without), Stack's
 behaviour-cloning recipe, and PPO on the shaped reward."""
 PACE = {
-    ("rigid_gym/Push-v0", "sac"): 308,
-    ("rigid_gym/Throw-v0", "sac"): 300,
-    ("rigid_gym/Stack-v0", "bc_sac"): 110,
-    ("rigid_gym/Stack-v0", "sac"): 205,
-    ("rigid_gym/Push-v0", "ppo"): 3800,
-    ("rigid_gym/Throw-v0", "ppo"): 1480,
-    ("rigid_gym/Stack-v0", "ppo"): 1160,
+    ("rigid_gym/Push-v0", "sac"): 767,
+    ("rigid_gym/Throw-v0", "sac"): 720,
+    ("rigid_gym/Stack-v0", "bc_sac"): 113,
+    ("rigid_gym/Stack-v0", "sac"): 329,
+    ("rigid_gym/Push-v0", "ppo"): 3409,
+    ("rigid_gym/Throw-v0", "ppo"): 2064,
+    ("rigid_gym/Stack-v0", "ppo"): 1814,
 }
-"""Env steps per wall second of each recipe, for the dry run's estimates, on the 2-core Intel
-Xeon VM shared with other work: a Push SAC run's measured pace, evaluations included (308),
-and the others' training pace (``benchmarks/learner.py --recipes``) times that run's ratio to
-its own training pace (308 / 473); Push PPO's is a probe's of its 64-env recipe, evaluations
-included, which Throw's and Stack's PPO (the same recipe) have not yet replaced."""
+"""Env steps per wall second of each recipe, for the dry run's estimates: the median over
+the three seeds in agents/results of env_steps / wall_s (evaluations, and making the
+demonstrations, included), two runs at a time on the 2-core Intel Xeon VM."""
 ONE_THREAD = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
               "XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"}
 """The environment of every run: one thread for PyTorch, numpy's BLAS and JAX."""

@@ -18,7 +18,7 @@ A setting is ``learner:width:n_envs:gradient_steps`` (gradient steps per vector 
 ``n_envs`` env steps). It measures pace only, not what is learned (``rigid_gym.agents.table``
 runs the learning). ``--recipes`` times each (env id, algo) of the results table
 (``rigid_gym.agents.table.RECIPES``) at its hyperparams.yml settings instead (without its
-demonstrations and evaluations), the figures behind the table's ``PACE``.
+demonstrations and evaluations: the table's ``PACE`` is whole runs' pace, those included).
 """
 
 import os
