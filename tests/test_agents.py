@@ -450,6 +450,14 @@ def test_the_queue_plans_done_unfinished_and_new_runs(tmp_path, capsys):
     assert "unknown task(s) ['nope']" in capsys.readouterr().err
 
 
+def test_a_model_saved_by_sbx_without_sbx_installed_says_which_extra_it_needs(monkeypatch):
+    from rigid_gym.agents import algorithms
+
+    monkeypatch.setattr(algorithms, "learner_available", lambda name: name != "sbx")
+    with pytest.raises(ValueError, match=r"trained with SBX \(JAX\): pip install -e '\.\[fast\]'"):
+        algorithms.find_algorithm("sbx:sac")
+
+
 def test_bc_sac_on_sbx_clones_the_demonstrations():
     pytest.importorskip("sbx")
     from rigid_gym.agents.algorithms import algorithm_class
