@@ -4,7 +4,8 @@
    ``rigid_gym.report.scenes``: settled, the 10-cube stack, the 55-box pyramid and piles of
    10, 100 and 1000 mixed bodies; falling, the piles of 10 and 100 in the first second after
    their drop. Every engine (ours, and ours stopping slow islands (``--sleep-speed``,
-   SolverConfig.sleep_speed), MuJoCo without and with its island sleeping, and PyBullet through ``rigid_gym.report.peers`` when the ``compare`` extra is installed: ``pip
+   SolverConfig.sleep_speed), MuJoCo without and with its island sleeping, and PyBullet
+   through ``rigid_gym.report.peers`` when the ``compare`` extra is installed: ``pip
    install -e ".[compare]"``) builds every scene and runs a settled scene's ``settle`` steps;
    then each of ``--repeats`` rounds times ``step(steps)`` of every scene and engine in turn,
    a falling scene's after a reset to its start. A rate is the median over
@@ -151,7 +152,7 @@ def dynamic_bodies(scene: rg.Scene) -> int:
 def build(engine: str, scene: rg.Scene, sleep_speed: float = SLEEP_SPEED):
     """A world of ``engine`` (one of ENGINES) for ``scene``, or why a peer has none (str);
     ours, sleeping, stops islands slower than ``sleep_speed`` (m/s, SolverConfig.sleep_speed)."""
-    if engine in (OURS, OURS_SLEEPING):
+    if engine not in PEERS:
         speed = sleep_speed if engine == OURS_SLEEPING else 0.0
         return rg.World(scene, dt=DT, config=rg.SolverConfig.for_scene(scene, sleep_speed=speed))
     module, world_class, _ = PEERS[engine]
@@ -220,7 +221,7 @@ def timed_rates(scenes, repeats: int, sleep_speed: float) -> tuple[dict, dict]:
                 continue
             if name.endswith("stack"):  # the top cube
                 moved[name, engine] = moved_mm(world, len(scene.bodies) - 1, STACK_SECONDS)
-            if engine not in (OURS, OURS_SLEEPING):
+            if engine in PEERS:
                 world.close()
     return rates, moved
 
