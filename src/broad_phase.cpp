@@ -127,17 +127,29 @@ int64_t add_pair(int i, int j, Span<const int32_t> motion, const PairLists& list
     return count + 1;
 }
 
-// Sort the first count pairs by (a, b): a least-significant-digit radix sort of the keys
-// a n + b, a byte a pass, through lists.spare (stable, no allocation). A pass is O(count)
-// and there are ceil(log2(n^2) / 8) of them (3 for 1000 bodies), where a comparison sort
-// takes log2(count) passes over the keys (13 for the ~6000 pairs of a pile of 1000).
-void sort_pairs(const PairLists& lists, int64_t count, int64_t num_bodies) {
-    for (int64_t k = 0; k < count; ++k) {
-        lists.keys[k] = static_cast<int64_t>(lists.pair_a[k]) * num_bodies + lists.pair_b[k];
+// Keys below this many are insertion-sorted: a radix pass costs its 256 counters however few
+// keys it moves (a sleeping pyramid with one rolling ball tests ~2 pairs a step).
+constexpr int64_t FEW_KEYS = 64;
+
+// Sort keys[0:count) (a n + b < largest + 1), through spare; returns where they ended up. A
+// least-significant-digit radix sort, a byte a pass (stable, no allocation): a pass is
+// O(count) and there are ceil(log2(n^2) / 8) of them (3 for 1000 bodies), where a
+// comparison sort takes log2(count) passes over the keys (13 for the ~6000 pairs of a pile
+// of 1000).
+Span<int64_t> sort_keys(Span<int64_t> keys, Span<int64_t> spare, int64_t count, uint64_t largest) {
+    if (count < FEW_KEYS) {
+        for (int64_t k = 1; k < count; ++k) {
+            const int64_t key = keys[k];
+            int64_t m = k - 1;
+            while (m >= 0 && keys[m] > key) {
+                keys[m + 1] = keys[m];
+                m -= 1;
+            }
+            keys[m + 1] = key;
+        }
+        return keys;
     }
-    const uint64_t bodies = static_cast<uint64_t>(num_bodies);
-    const uint64_t largest = bodies * bodies - 1;  // the largest key a pair can have
-    Span<int64_t> src = lists.keys, dst = lists.spare;
+    Span<int64_t> src = keys, dst = spare;
     for (int shift = 0; shift < 64 && (largest >> shift) != 0; shift += 8) {
         int64_t start[257] = {};  // start[d + 1]: how many keys have digit d, then prefix sums
         for (int64_t k = 0; k < count; ++k) {
@@ -151,9 +163,45 @@ void sort_pairs(const PairLists& lists, int64_t count, int64_t num_bodies) {
         }
         std::swap(src, dst);
     }
+    return src;
+}
+
+// Put the count pairs in (a, b) order: the first `tested` in the order the sweep found them,
+// the rest carried from the last list and already in order (find_world_pairs). The tested
+// ones are sorted by their keys a n + b and merged with the carried ones.
+void sort_pairs(const PairLists& lists, int64_t tested, int64_t count, int64_t num_bodies) {
+    for (int64_t k = 0; k < tested; ++k) {
+        lists.keys[k] = static_cast<int64_t>(lists.pair_a[k]) * num_bodies + lists.pair_b[k];
+    }
+    const uint64_t bodies = static_cast<uint64_t>(num_bodies);
+    const Span<int64_t> sorted = sort_keys(lists.keys, lists.spare, tested, bodies * bodies - 1);
+    const Span<int64_t> merged = sorted.data == lists.keys.data ? lists.spare : lists.keys;
+    int64_t t = 0, c = tested;
     for (int64_t k = 0; k < count; ++k) {
-        lists.pair_a[k] = static_cast<int32_t>(src[k] / num_bodies);
-        lists.pair_b[k] = static_cast<int32_t>(src[k] % num_bodies);
+        const int64_t carried = c < count ? static_cast<int64_t>(lists.pair_a[c]) * num_bodies + lists.pair_b[c] : 0;
+        if (c == count || (t < tested && sorted[t] < carried)) {
+            merged[k] = sorted[t++];
+        } else {
+            merged[k] = carried;
+            c += 1;
+        }
+    }
+    // key / n and key % n through the reciprocal, corrected by one: two 64-bit divisions a
+    // pair were most of a short list's sorting (q < 2^31 is off by less than 2^-21 before
+    // the truncation)
+    const double inverse = 1.0 / static_cast<double>(num_bodies);
+    for (int64_t k = 0; k < count; ++k) {
+        int64_t q = static_cast<int64_t>(static_cast<double>(merged[k]) * inverse);
+        int64_t r = merged[k] - q * num_bodies;
+        if (r < 0) {
+            q -= 1;
+            r += num_bodies;
+        } else if (r >= num_bodies) {
+            q += 1;
+            r -= num_bodies;
+        }
+        lists.pair_a[k] = static_cast<int32_t>(q);
+        lists.pair_b[k] = static_cast<int32_t>(r);
     }
 }
 
@@ -188,11 +236,13 @@ double swept_margin(const Geometry& geo, int i, Vec3 velocity, Vec3 angular_velo
 
 int64_t find_world_pairs(const Geometry& geo, Span<const int32_t> motion,
                          const BodyStates& bodies, double margin, double dt,
-                         double acceleration, bool sweep, const PairLists& lists) {
+                         double acceleration, bool sweep, const PairLists& lists,
+                         Carried carried) {
     const int n = static_cast<int>(bodies.position.size);
     const Array<int32_t>& unbounded = geo.body_unbounded;
+    const bool carrying = carried.kept.size == n;
     for (int i = 0; i < n; ++i) {
-        if (unbounded[i] == 0) {
+        if (unbounded[i] == 0 && !(carrying && carried.kept[i])) {  // a kept body's box holds
             const double grown = swept_margin(geo, i, bodies.velocity[i], bodies.angular_velocity[i],
                                               margin, dt, acceleration);
             lists.reach[i] = std::max(lists.reach[i], grown);
@@ -200,13 +250,15 @@ int64_t find_world_pairs(const Geometry& geo, Span<const int32_t> motion,
                                            lists.reach[i]);
         }
     }
+    // known: both bodies kept (a pair of two bodies not kept, or of one, is tested)
+    const auto known = [&](int i, int j) { return carrying && carried.kept[i] && carried.kept[j]; };
     int64_t count = 0;
     for (int p = 0; p < n; ++p) {
         if (unbounded[p] == 0) {
             continue;
         }
         for (int i = 0; i < n; ++i) {
-            if (unbounded[i] == 0 && box_below_plane(bodies, lists.bounds[i], p, 0.0)) {
+            if (unbounded[i] == 0 && !known(i, p) && box_below_plane(bodies, lists.bounds[i], p, 0.0)) {
                 count = add_pair(i, p, motion, lists, count);
             }
         }
@@ -227,27 +279,46 @@ int64_t find_world_pairs(const Geometry& geo, Span<const int32_t> motion,
                 if (lists.bounds[j].lo.x > lists.bounds[i].hi.x) {
                     break;
                 }
-                if (boxes_overlap(lists.bounds[i], lists.bounds[j]) &&
+                if (!known(i, j) && boxes_overlap(lists.bounds[i], lists.bounds[j]) &&
                     turned_boxes_overlap(geo, bodies, reach, i, j)) {
                     count = add_pair(i, j, motion, lists, count);
                 }
             }
         }
     } else {
+        // every pair of bounded bodies of which one is not kept, once, each tested as (lower
+        // index, higher) as without carrying: O(n) per body not kept, so a sleeping pyramid
+        // beside one rolling ball costs the ball's n tests. lists.order (the sweep's) holds
+        // the bodies not kept.
+        int64_t m = 0;
         for (int i = 0; i < n; ++i) {
-            if (unbounded[i] != 0) {
-                continue;
+            if (unbounded[i] == 0 && !(carrying && carried.kept[i])) {
+                lists.order[m++] = i;
             }
-            for (int j = i + 1; j < n; ++j) {
-                if (unbounded[j] == 0 && boxes_overlap(lists.bounds[i], lists.bounds[j]) &&
-                    turned_boxes_overlap(geo, bodies, reach, i, j)) {
-                    count = add_pair(i, j, motion, lists, count);
+        }
+        for (int64_t t = 0; t < m; ++t) {
+            const int i = static_cast<int>(lists.order[t]);
+            for (int j = carrying ? 0 : i + 1; j < n; ++j) {
+                if (unbounded[j] != 0 || !(j > i || (j != i && carried.kept[j]))) {
+                    continue;  // a pair of two bodies not kept is met from the lower one
+                }
+                const int lo = std::min(i, j), hi = std::max(i, j);
+                if (boxes_overlap(lists.bounds[lo], lists.bounds[hi]) &&
+                    turned_boxes_overlap(geo, bodies, reach, lo, hi)) {
+                    count = add_pair(lo, hi, motion, lists, count);
                 }
             }
         }
     }
+    const int64_t tested = count;
+    for (int64_t k = 0; carrying && k < carried.keys.size; ++k) {
+        const int a = static_cast<int>(carried.keys[k] / n), b = static_cast<int>(carried.keys[k] % n);
+        if (known(a, b)) {
+            count = add_pair(a, b, motion, lists, count);
+        }
+    }
     if (count <= lists.pair_a.size) {
-        sort_pairs(lists, count, n);
+        sort_pairs(lists, tested, count, n);
     }
     return count;
 }

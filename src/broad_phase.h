@@ -40,6 +40,15 @@ struct PairLists {
 double swept_margin(const Geometry& geo, int i, Vec3 velocity, Vec3 angular_velocity,
                     double margin, double dt, double acceleration);
 
+// Pairs known without testing: where kept[i] and kept[j] (both bodies exactly as when the
+// last list was made, with the same dt, sleep.h), the pair is listed iff the last list had it,
+// so those pairs are taken from that list and never tested. A kept body's box and reach are
+// left as that list made them. Empty spans: every pair is tested, every box made.
+struct Carried {
+    Span<const uint8_t> kept;  // (n,) or empty
+    Span<const int64_t> keys;  // the last list's pairs with a kept body, as a n + b in (a, b) order
+};
+
 // Candidate pairs of one world for poses anywhere within the next dt; returns how many.
 // Every box is grown by swept_margin (dt = 0: the current poses only), or by reach[i] (m)
 // where that is larger, and reach is raised to the growth used (zero it for the margins
@@ -47,6 +56,7 @@ double swept_margin(const Geometry& geo, int i, Vec3 velocity, Vec3 angular_velo
 // then only that many were written and the caller must grow the buffers.
 int64_t find_world_pairs(const Geometry& geo, Span<const int32_t> motion,
                          const BodyStates& bodies, double margin, double dt,
-                         double acceleration, bool sweep, const PairLists& lists);
+                         double acceleration, bool sweep, const PairLists& lists,
+                         Carried carried = {});
 
 }  // namespace rg

@@ -108,8 +108,12 @@ void refresh_rotation_and_angular_velocity(const BodyStates& bodies, const BodyM
     }
 }
 
-void refresh_inverse_inertia(const BodyStates& bodies, const BodyModel& model) {
+void refresh_inverse_inertia(const BodyStates& bodies, const BodyModel& model,
+                             Span<const uint8_t> kept) {
     for (int64_t i = 0; i < bodies.position.size; ++i) {
+        if (kept.size > 0 && kept[i]) {
+            continue;
+        }
         bodies.inverse_inertia[i] = model.motion[i] == DYNAMIC
                                         ? inverse_inertia(bodies.rotation[i], model.inverse_moments[i])
                                         : Mat3{};

@@ -36,8 +36,11 @@ int rotation_substeps(double speed, double dt);
 // R(q) for every body and omega = I(t)^-1 L for the dynamic ones (after q or L were set).
 void refresh_rotation_and_angular_velocity(const BodyStates& bodies, const BodyModel& model);
 
-// I(t)^-1 = R diag(1/I) R^T of every body into bodies.inverse_inertia (0 unless dynamic).
-void refresh_inverse_inertia(const BodyStates& bodies, const BodyModel& model);
+// I(t)^-1 = R diag(1/I) R^T of every body into bodies.inverse_inertia (0 unless dynamic),
+// but those of `kept` (empty, or (n,) nonzero where it holds already: an asleep body unchanged
+// since its last refresh, sleep.h).
+void refresh_inverse_inertia(const BodyStates& bodies, const BodyModel& model,
+                             Span<const uint8_t> kept = {});
 
 // V += dt (g + F/M), L += dt tau, omega = I(t)^-1 L, for the dynamic bodies (with
 // bodies.inverse_inertia).

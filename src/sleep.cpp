@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace rg {
 
@@ -25,17 +26,22 @@ void read_state(const BodyStates& bodies, int i, Span<double> out) {
     }
 }
 
-// Is body i's state bit for bit its snapshot? For doubles that are not NaN, equal with the
-// same sign bit means the same bits (the sign of a zero counts); a NaN is never unchanged.
-// Every entry is compared (no early exit): a branch per entry costs more than the compares.
+// Is body i's state bit for bit its snapshot (the sign of a zero counts)? A NaN is never
+// unchanged. Every entry is compared (no early exit): a branch per entry costs more than the
+// compares, and the bits' differences OR-ed together are a few vector operations.
 bool unchanged(const BodyStates& bodies, int i, Span<const double> snapshot) {
     double now[SNAPSHOT];
     read_state(bodies, i, {now, SNAPSHOT});
-    bool same = true;
+    uint64_t differ = 0;
+    bool nan = false;
     for (int k = 0; k < SNAPSHOT; ++k) {
-        same &= now[k] == snapshot[k] && std::signbit(now[k]) == std::signbit(snapshot[k]);
+        uint64_t a, b;
+        std::memcpy(&a, &now[k], sizeof a);
+        std::memcpy(&b, &snapshot[k], sizeof b);
+        differ |= a ^ b;
+        nan |= now[k] != now[k];
     }
-    return same;
+    return differ == 0 && !nan;
 }
 
 // Does a force or torque act on body i in this step? (-0.0 counts as none, as for the sum.)
@@ -76,19 +82,31 @@ int64_t root_of(Span<int64_t> parent, int64_t i) {
 }
 
 // rest.island: each dynamic body's island, named by its least body index (-1 for static and
-// kinematic bodies); rest.bodies and rest.pairs counted per island.
+// kinematic bodies); rest.bodies and rest.pairs counted per island. The names do not depend
+// on the order of the unions, so an island of the last step whose bodies are all kept
+// (rest.intact) starts joined under its name: its pairs among themselves are the last step's,
+// which joined them then, and only pairs with a body not kept are joined again.
 void find_islands(WorldStep& w, int64_t count) {
     const Rest& rest = w.rest;
     const Span<const int32_t> motion = w.model.motion;
     const int n = w.num_bodies();
     for (int i = 0; i < n; ++i) {
-        rest.island[i] = motion[i] == DYNAMIC ? i : -1;
+        rest.intact[i] = 1;
+    }
+    for (int i = 0; i < n; ++i) {
+        if (motion[i] == DYNAMIC && !rest.kept[i] && rest.previous_island[i] >= 0) {
+            rest.intact[rest.previous_island[i]] = 0;
+        }
+    }
+    const auto joined = [&](int i) { return rest.kept[i] && rest.intact[rest.previous_island[i]]; };
+    for (int i = 0; i < n; ++i) {
+        rest.island[i] = motion[i] != DYNAMIC ? -1 : joined(i) ? rest.previous_island[i] : i;
         rest.bodies[i] = 0;
         rest.pairs[i] = 0;
     }
     for (int64_t k = 0; k < count; ++k) {  // a is dynamic (broad_phase.h)
         const int b = w.lists.pair_b[k];
-        if (motion[b] == DYNAMIC) {
+        if (motion[b] == DYNAMIC && !(joined(w.lists.pair_a[k]) && joined(b))) {
             const int64_t ra = root_of(rest.island, w.lists.pair_a[k]);
             const int64_t rb = root_of(rest.island, b);
             rest.island[std::max(ra, rb)] = std::min(ra, rb);
@@ -100,25 +118,48 @@ void find_islands(WorldStep& w, int64_t count) {
             rest.bodies[rest.island[i]] += 1;
         }
     }
+    // pairs are listed by a, so runs of them share an island: counted in a register, the
+    // counts do not wait on each other's stores
+    int64_t island = -1, run = 0;
     for (int64_t k = 0; k < count; ++k) {
-        rest.pairs[rest.island[w.lists.pair_a[k]]] += 1;
+        const int64_t r = rest.island[w.lists.pair_a[k]];
+        if (r != island) {
+            if (run > 0) {
+                rest.pairs[island] += run;
+            }
+            island = r;
+            run = 0;
+        }
+        run += 1;
+    }
+    if (run > 0) {
+        rest.pairs[island] += run;
     }
 }
 
-// The impulse pair key (a n + b) transmitted in the last step: the last step's list is two
-// runs sorted by key, its awake pairs and its asleep ones (move_asleep_last keeps each in
-// order), and an asleep island's pairs were all listed then.
-Vec3 previous_impulse(const Rest& rest, int64_t key) {
-    const int64_t runs[3] = {0, *rest.previous_awake, *rest.previous_count};
-    for (int r = 0; r < 2; ++r) {
-        const int64_t* first = rest.previous_keys.data + runs[r];
-        const int64_t* last = rest.previous_keys.data + runs[r + 1];
-        const int64_t* found = std::lower_bound(first, last, key);
-        if (found != last && *found == key) {
-            return rest.previous_impulse[found - rest.previous_keys.data];
+// The impulses the asleep pairs [awake, count) transmitted in the last step. The last step's
+// list is two runs sorted by key (a n + b), its awake pairs and its asleep ones
+// (move_asleep_last keeps each in order), and an asleep island's pairs were all listed then;
+// the asleep pairs are sorted by key too, so one walk through each run finds them all.
+void carry_impulses(WorldStep& w, int64_t awake, int64_t count) {
+    const Rest& rest = w.rest;
+    const int64_t n = w.num_bodies();
+    int64_t at[2] = {0, *rest.previous_awake};
+    const int64_t end[2] = {*rest.previous_awake, *rest.previous_count};
+    for (int64_t k = awake; k < count; ++k) {
+        const int64_t key = static_cast<int64_t>(w.lists.pair_a[k]) * n + w.lists.pair_b[k];
+        Vec3 impulse = {0.0, 0.0, 0.0};  // not found: not reached, an island with a new pair is awake
+        for (int r = 0; r < 2; ++r) {
+            while (at[r] < end[r] && rest.previous_keys[at[r]] < key) {
+                at[r] += 1;
+            }
+            if (at[r] < end[r] && rest.previous_keys[at[r]] == key) {
+                impulse = rest.previous_impulse[at[r]];
+                break;
+            }
         }
+        w.pair_impulse[k] = impulse;
     }
-    return {0.0, 0.0, 0.0};  // not reached: an island with a new pair is awake
 }
 
 // With Settings::sleep_speed: each dynamic body's time below it counted (count_slow_time);
@@ -153,21 +194,35 @@ void stop_slow_islands(WorldStep& w, double dt) {
 
 }  // namespace
 
+void mark_kept(WorldStep& w, double dt) {
+    const BodyStates& s = w.bodies;
+    const Span<const int32_t> motion = w.model.motion;
+    const Rest& rest = w.rest;
+    const bool same_dt = *rest.previous_dt == dt;
+    for (int i = 0; i < w.num_bodies(); ++i) {
+        const bool candidate =
+            same_dt && (motion[i] != DYNAMIC ||
+                        (rest.asleep[i] && rest.previous_island[i] >= 0 && rest.resting[rest.island[i]]));
+        rest.kept[i] = candidate && unchanged(s, i, snapshot_of(rest, i));
+    }
+}
+
 void mark_asleep(WorldStep& w, int64_t count, double dt) {
     const BodyStates& s = w.bodies;
     const Span<const int32_t> motion = w.model.motion;
     const Rest& rest = w.rest;
     const int n = w.num_bodies();
     const double sleep_speed = w.settings->sleep_speed;
+    const bool same_dt = *rest.previous_dt == dt;  // another dt is another step: none rests
     find_islands(w, count);
     // rest.slow: not disturbed (the same bodies and as many pairs as in the last step, no
     // force, no attachment, its static and kinematic partners unchanged); rest.resting: and
-    // every body unchanged too
+    // every body unchanged too, at the same dt (rest.kept: known unchanged)
     for (int i = 0; i < n; ++i) {
         rest.slow[i] = motion[i] == DYNAMIC && rest.island[i] == i &&
                        rest.bodies[i] == rest.previous_bodies[i] &&
                        rest.pairs[i] == rest.previous_pairs[i];
-        rest.resting[i] = rest.slow[i];
+        rest.resting[i] = rest.slow[i] && same_dt;
     }
     for (int i = 0; i < n; ++i) {
         if (motion[i] != DYNAMIC) {
@@ -177,14 +232,15 @@ void mark_asleep(WorldStep& w, int64_t count, double dt) {
         if (rest.previous_island[i] != r || w.attached.parent[i] >= 0 || pushed(s, i)) {
             rest.slow[r] = 0;
         }
-        if (rest.resting[r] && !unchanged(s, i, snapshot_of(rest, i))) {
+        if (rest.resting[r] && !rest.kept[i] && !unchanged(s, i, snapshot_of(rest, i))) {
             rest.resting[r] = 0;
         }
     }
     for (int64_t k = 0; k < count; ++k) {
         const int b = w.lists.pair_b[k];
         const int64_t r = rest.island[w.lists.pair_a[k]];
-        if (rest.slow[r] && motion[b] != DYNAMIC && !unchanged(s, b, snapshot_of(rest, b))) {
+        if (rest.slow[r] && motion[b] != DYNAMIC && !rest.kept[b] &&
+            !unchanged(s, b, snapshot_of(rest, b))) {
             rest.slow[r] = 0;
         }
     }
@@ -213,17 +269,15 @@ void mark_asleep(WorldStep& w, int64_t count, double dt) {
         rest.previous_pairs[i] = rest.pairs[i];
     }
     const int64_t awake = move_asleep_last(w, count);
-    for (int64_t k = awake; k < count; ++k) {
-        w.pair_impulse[k] = previous_impulse(rest, static_cast<int64_t>(w.lists.pair_a[k]) * n +
-                                                       w.lists.pair_b[k]);
-    }
+    carry_impulses(w, awake, count);
     *rest.awake_pairs = awake;
     *rest.at_rest = all_asleep;
+    *rest.previous_dt = dt;
 }
 
 bool still_at_rest(WorldStep& w, double dt) {
     const Rest& rest = w.rest;
-    if (!*rest.at_rest) {
+    if (!*rest.at_rest || *rest.previous_dt != dt) {
         return false;
     }
     bool same = true;

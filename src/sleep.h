@@ -45,6 +45,16 @@ namespace rg {
 // (Box2D's time to sleep).
 constexpr double SLEEP_TIME = 0.5;
 
+// At the start of a step of dt s, before the broad phase: rest.kept, the bodies whose pairs
+// with each other the broad phase takes from the last step's list (broad_phase.h, Carried).
+// A static or kinematic body unchanged since the last step began, and a dynamic body that
+// slept through it as part of a fixed point (rest.resting: not one stopped in that step,
+// whose listing saw it moving) and is unchanged since: the list is a function of the two
+// bodies' states and dt, so each such pair is listed as it was then. None after a change of
+// dt or a forgotten world. What a body asleep costs a step is then this comparison; its pairs
+// with a moving body are still tested.
+void mark_kept(WorldStep& w, double dt);
+
 // At the start of a step of dt s, after the broad phase (its count pairs; pair_impulse
 // zeroed) and before the step keeps its starting velocities: find the islands, decide which
 // sleep (stopping the slow ones, with Settings::sleep_speed), move their pairs behind the
@@ -59,7 +69,7 @@ void mark_asleep(WorldStep& w, int64_t count, double dt);
 // argument above and the step would change nothing: not the states, the listed pairs, their
 // order or impulses. The caller skips the step whole; this only counts each body's time
 // below Settings::sleep_speed on, as the step would. Its cost is the comparison of each
-// body's state with its snapshot.
+// body's state with its snapshot. A step of another dt than the last is always run.
 bool still_at_rest(WorldStep& w, double dt);
 
 // Reorder the count pairs: those without an asleep body first, then those with one, each in

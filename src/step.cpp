@@ -20,9 +20,15 @@ constexpr int MAX_RELISTS = 4;
 
 // The world's pairs for its current poses and velocities, boxes grown by at least the
 // reach recorded so far; returns how many. acceleration: m/s^2 the bodies may gain (gravity).
-int64_t list_pairs(WorldStep& w, double dt, double acceleration) {
+// carried: pairs among the bodies of rest.kept taken from the last step's list (sleep.h):
+// from its asleep pairs, in (a, b) order, which hold every pair of a kept dynamic body (it
+// slept) and no pair of two static or kinematic ones (never listed).
+int64_t list_pairs(WorldStep& w, double dt, double acceleration, bool carried) {
+    const int64_t asleep = *w.rest.previous_awake;
+    const Carried known = {{w.rest.kept.data, w.rest.kept.size},
+                           {w.rest.previous_keys.data + asleep, *w.rest.previous_count - asleep}};
     return find_world_pairs(*w.geo, w.model.motion, w.bodies, 0.0, dt, acceleration,
-                            w.settings->sweep, w.lists);
+                            w.settings->sweep, w.lists, carried ? known : Carried{});
 }
 
 // Copy every body's velocity, angular momentum and angular velocity into w.start (keep), or
@@ -122,12 +128,21 @@ int64_t step_world(WorldStep& w, int64_t steps, double dt) {
         // 0. broad phase: every pair whose boxes may meet within this step (velocities
         //    included); held bodies are put at their place first. Counted as a run only when
         //    it lists pairs (SolverConfig.phases)
+        //    A kept body (sleep.h) keeps its inverse inertia, box and reach: it is as when
+        //    they were computed
         place_attached(w.bodies, w.attached);
-        refresh_inverse_inertia(w.bodies, w.model);
-        for (int i = 0; i < w.num_bodies(); ++i) {
-            w.lists.reach[i] = 0.0;
+        if (c.sleep) {
+            mark_kept(w, dt);
         }
-        const int64_t count = c.broad_phase ? list_pairs(w, dt, c.gravity) : 0;
+        const Span<const uint8_t> kept =
+            c.sleep ? Span<const uint8_t>{w.rest.kept.data, w.rest.kept.size} : Span<const uint8_t>{};
+        refresh_inverse_inertia(w.bodies, w.model, kept);
+        for (int i = 0; i < w.num_bodies(); ++i) {
+            if (!(c.sleep && w.rest.kept[i])) {
+                w.lists.reach[i] = 0.0;
+            }
+        }
+        const int64_t count = c.broad_phase ? list_pairs(w, dt, c.gravity, c.sleep) : 0;
         *w.pair_count = count;
         if (count > capacity) {
             lap(w.timers, BROAD_STAGE, since, 0);  // run again once the buffers have grown
@@ -155,7 +170,7 @@ int64_t step_world(WorldStep& w, int64_t steps, double dt) {
             for (int relist = 0; relist < MAX_RELISTS && outgrown(w, dt); ++relist) {
                 since = lap(w.timers, POSITION_STAGE, since, 0);
                 const int64_t listed = *w.pair_count;
-                const int64_t more = list_pairs(w, dt, 0.0);  // the final velocities
+                const int64_t more = list_pairs(w, dt, 0.0, false);  // the final velocities
                 if (more == listed) {  // boxes only grow: the same count is the same pairs
                     if (c.sleep) {     // in the order the impulses were recorded in
                         move_asleep_last(w, listed);

@@ -181,6 +181,9 @@ StepContext::StepContext(int num_worlds, Geometry geometry, std::vector<int32_t>
     previous_count_.assign(b, 0);
     previous_awake_.assign(b, 0);
     at_rest_.assign(b, 0);
+    kept_.assign(b * n, 0);
+    intact_.assign(b * n, 0);
+    previous_dt_.assign(b, 0.0);
     allocate_pairs(std::max<int64_t>(8, 2 * n));
     contacts_.allocate_rows(num_worlds_, 8 * pair_capacity_);
 }
@@ -230,6 +233,7 @@ void StepContext::forget(int first, int last) {
     }
     for (int w = first; w < last; ++w) {
         at_rest_[w] = 0;
+        previous_dt_[w] = 0.0;
     }
 }
 
@@ -272,7 +276,8 @@ WorldStep StepContext::world(int w) {
               world_rows(slow_time_, w, n),       world_rows(snapshot_, w, n * SNAPSHOT),
               world_rows(previous_keys_, w, p),   world_rows(previous_impulse_, w, p),
               &previous_count_[w],                &previous_awake_[w],
-              &at_rest_[w]};
+              &at_rest_[w],                       world_rows(kept_, w, n),
+              world_rows(intact_, w, n),          &previous_dt_[w]};
     s.timers = {world_rows(stage_seconds, w, STAGE_COUNT), world_rows(stage_calls, w, STAGE_COUNT),
                 timed};
     return s;

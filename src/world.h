@@ -82,6 +82,10 @@ struct Rest {
     int64_t* previous_count;          // how many pairs the last step listed
     int64_t* previous_awake;          // how many of them (the first) were awake
     int64_t* at_rest;                 // 1: every dynamic body slept through the last step
+    Span<uint8_t> kept;               // (n,) the broad phase carries pairs among these from the
+                                      //      last step's list (mark_kept, sleep.h)
+    Span<uint8_t> intact;             // (n,) per island of the last step: all its bodies kept
+    double* previous_dt;              // s, the last step's dt; 0: none since forgotten
 };
 
 // Contacts found once per step (contacts.h): per listed pair (P,) and a pool of rows (Q,).
@@ -248,8 +252,8 @@ private:
     Array<int64_t> awake_pairs_, island_, previous_island_, island_bodies_, island_pairs_,
         previous_bodies_, previous_pairs_, previous_keys_, previous_count_, previous_awake_,
         at_rest_;
-    Array<uint8_t> resting_, slow_;
-    Array<double> slow_time_;
+    Array<uint8_t> resting_, slow_, kept_, intact_;
+    Array<double> slow_time_, previous_dt_;
     Array<double> snapshot_;
     Array<Vec3> previous_impulse_;
 };

@@ -10,7 +10,7 @@ import rigid_gym as rg
 from rigid_gym import quaternion as quat
 from rigid_gym.meshes import l_shape_mesh
 from rigid_gym.report import scenes
-from rigid_gym.report.scenes import cube_stack, pyramid
+from rigid_gym.report.scenes import cube_stack, pyramid, pyramid_and_ball
 
 G = 9.81
 H = scenes.CUBE_HALF  # half edge of the test cubes, m
@@ -513,9 +513,8 @@ def test_a_slow_island_is_stopped_by_sleep_speed_and_sleeps_until_struck():
     never sleeps by default. With sleep_speed its island is stopped once every box has been
     slower than that for SLEEP_TIME (0.5 s), and then holds its pose bit for bit, until a
     ball rolling into it wakes the whole island."""
-    scene = pyramid(4)
-    ball = scene.add_body(rg.Sphere(0.03), mass=0.2, friction=0.5, position=(-2.0, 0.0, 0.03),
-                          velocity=(1.0, 0.0, 0.0))
+    scene = pyramid_and_ball(4)
+    ball = len(scene.bodies) - 1
     boxes = list(range(1, ball))
     sleeping = {}
     for speed in (0.0, 0.01):
@@ -533,6 +532,29 @@ def test_a_slow_island_is_stopped_by_sleep_speed_and_sleeps_until_struck():
     assert stopped < woken < 720 and sleeping[0.01][stopped:woken].all()
     assert all(np.array_equal(poses[stopped], poses[t]) for t in range(stopped, woken))
     assert world.position[ball, 0] < 0.0  # the ball was stopped by the pyramid it woke
+
+
+def test_pairs_carried_past_sleeping_bodies_are_the_pairs_the_broad_phase_lists():
+    """The broad phase tests no pair of two bodies that slept through the last step unchanged
+    and takes it from the last step's list (src/sleep.h, mark_kept). The pyramid stopped by
+    sleep_speed sleeps while the ball rolls towards it, then wakes when struck: at every step,
+    a fresh world started from the same state (every array copied, bit for bit) lists the
+    same pairs in its first step, all of them tested."""
+    scene = pyramid_and_ball(4)
+    config = rg.SolverConfig.for_scene(scene, sleep_speed=0.01)
+    world = rg.World(scene, config=config)
+    carried = 0
+    for step in range(720):
+        fresh = rg.World(scene, config=config)
+        for mine, theirs in zip(fresh.state, world.state):
+            mine[...] = theirs
+        asleep = world.sleeping().copy()
+        world.step(1)
+        fresh.step(1)
+        pairs, fresh_pairs = world.listed_pairs()[0], fresh.listed_pairs()[0]
+        assert sorted(map(tuple, pairs)) == sorted(map(tuple, fresh_pairs)), step
+        carried += int(np.count_nonzero(asleep[pairs].all(axis=1)))
+    assert carried > 1000  # pyramid pairs were carried for hundreds of steps
 
 
 def test_a_sleeping_cube_reports_its_weight_as_the_support_impulse():

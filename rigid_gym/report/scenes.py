@@ -98,6 +98,16 @@ def pyramid(rows: int) -> rg.Scene:
     return scene
 
 
+def pyramid_and_ball(rows: int, speed: float = 1.0) -> rg.Scene:
+    """``pyramid(rows)`` and a 0.2 kg ball of 3 cm radius on the ground 2 m from its centre,
+    rolling towards it at ``speed`` m/s (away from it for a negative speed): a resting island
+    beside one moving body. The ball is the last body."""
+    scene = pyramid(rows)
+    scene.add_body(rg.Sphere(0.03), mass=0.2, friction=0.5, position=(-2.0, 0.0, 0.03),
+                   velocity=(speed, 0.0, 0.0))
+    return scene
+
+
 def pile(count: int, seed: int = 0) -> rg.Scene:
     """``count`` boxes, spheres and capsules (about 5 cm, 500 kg/m^3) in columns of about 8
     over a walled square pit sized for them, about to fall onto each other. Layers are 9 cm
