@@ -51,10 +51,12 @@ void keep_velocities(WorldStep& w, bool keep, int body = -1) {
 
 // True when some body, at its current velocity, moves further in dt than its box was grown.
 // Called before the position update, which moves a body by its current velocities: no
-// acceleration term (the broad phase's bounds the velocity update's gravity).
+// acceleration term (the broad phase's bounds the velocity update's gravity). An asleep body
+// has its velocities of the step's start back, which its box was grown for.
 bool outgrown(const WorldStep& w, double dt) {
+    const bool sleeping = w.settings->sleep;
     for (int i = 0; i < w.num_bodies(); ++i) {
-        if (w.geo->body_unbounded[i] == 0 &&
+        if (w.geo->body_unbounded[i] == 0 && !(sleeping && w.rest.asleep[i]) &&
             swept_margin(*w.geo, i, w.bodies.velocity[i], w.bodies.angular_velocity[i], 0.0, dt,
                          0.0) > w.lists.reach[i]) {
             return true;
