@@ -1,8 +1,8 @@
 """Speed against the bar of the speed issue: solver steps/s, env steps/s, batched env steps/s.
 
 1. Solver (``--only solver``): steps/s at dt = 1/240, one world, for the scenes of
-   ``rigid_gym.report.scenes``: settled, the 10-cube stack, the 55-box pyramid and piles of
-   10, 100 and 1000 mixed bodies; falling, the piles of 10 and 100 in the first second after
+   ``rigid_gym.report.scenes``: settled, the 10-cube stack, the 55-box pyramid (alone, and
+   beside a ball rolling away from it) and piles of 10, 100 and 1000 mixed bodies; falling, the piles of 10 and 100 in the first second after
    their drop. Every engine (ours, and ours stopping slow islands (``--sleep-speed``,
    SolverConfig.sleep_speed), MuJoCo without and with its island sleeping, and PyBullet
    through ``rigid_gym.report.peers`` when the ``compare`` extra is installed: ``pip
@@ -59,7 +59,7 @@ from rigid_gym.envs.scripted import scripted_policy
 import rigid_gym as rg
 from rigid_gym import _core
 from rigid_gym.report import peers
-from rigid_gym.report.scenes import cube_stack, pile, pyramid
+from rigid_gym.report.scenes import cube_stack, pile, pyramid, pyramid_and_ball
 
 DT = 1 / 240
 STACK_SECONDS = 10.0
@@ -127,6 +127,9 @@ def machine_line() -> str:
 
 # -- solver ----------------------------------------------------------------------------------
 
+PYRAMID_AND_BALL = "55-box pyramid, a ball rolling"
+"""The settled pyramid beside a ball rolling away from it at 1 m/s: one body awake among
+resting ones, what an island that sleeps costs a step while another moves."""
 FALLING = ", falling"
 """The name's ending of a scene timed from its start (settle = 0), reset before each timing."""
 
@@ -140,6 +143,7 @@ def solver_scenes(quick: bool) -> list[tuple[str, rg.Scene, int, int]]:
         return [("10-cube stack", cube_stack(10), 240, 60), ("pile of 10", pile(10), 120, 60),
                 ("pile of 100", pile(100), 120, 8), ("pile of 10" + FALLING, pile(10), 0, 60)]
     return [("10-cube stack", cube_stack(10), 240, 240), ("55-box pyramid", pyramid(10), 240, 120),
+            (PYRAMID_AND_BALL, pyramid_and_ball(10, speed=-1.0), 240, 120),
             ("pile of 10", pile(10), 240, 240), ("pile of 100", pile(100), 240, 48),
             ("pile of 1000", pile(1000), 240, 4), ("pile of 10" + FALLING, pile(10), 0, 240),
             ("pile of 100" + FALLING, pile(100), 0, 240)]
