@@ -508,6 +508,29 @@ def test_a_world_at_rest_skips_its_steps_until_anything_changes(wake_up):
     assert states[50] != states[48]  # and the change showed
 
 
+def test_a_world_at_rest_runs_the_first_step_of_another_dt():
+    """A fixed point of the step at one dt is not known to be one at another: the first step
+    after dt changes runs (the profile counts its broad phase), and every state and pair
+    impulse stays bit-identical to stepping with sleeping off."""
+    scene = resting_world_scene()
+    config = rg.SolverConfig.for_scene(scene)
+    runs = {}
+    for sleep in (True, False):
+        world = rg.World(scene, config=dataclasses.replace(config, sleep=sleep))
+        states, broad = [], []
+        for t in range(80):
+            if t == 50:
+                world.dt = 1 / 100
+            world.step(1)
+            states.append(state_bits(world))
+            broad.append(world.profile()["broad_phase"]["calls"])
+        runs[sleep] = states, np.diff(broad)
+    (states, broad), (states_awake, _) = runs[True], runs[False]
+    assert states == states_awake
+    assert not broad[10:49].any()  # at rest at 1/240
+    assert broad[49] == 1  # the first step at 1/100 ran
+
+
 def test_a_slow_island_is_stopped_by_sleep_speed_and_sleeps_until_struck():
     """A 10-box pyramid moves by round-off (~1e-17 m a step), so it is no exact fixed point and
     never sleeps by default. With sleep_speed its island is stopped once every box has been
