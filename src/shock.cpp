@@ -94,7 +94,7 @@ int resolve_supported_body(WorldStep& w, int body, int64_t current, double dt) {
         const int64_t found = gather_pair(w, {k, body, -GRAPH_MARGIN}, dt, NO_LOOKAHEAD, wide, count);
         if (count + found > wide.depth.size) {
             // no room to combine it: resolve this support on its own rather than drop it
-            applied += resolve_pair(w, k, a, b, dt, NO_LOOKAHEAD, SHOCK, 0.0, {a == body, b == body});
+            applied += resolve_pair(w, k, dt, NO_LOOKAHEAD, SHOCK, 0.0, {a == body, b == body});
             continue;
         }
         count += found;
@@ -130,9 +130,8 @@ void resolve_levels(WorldStep& w, double dt) {
                 int inside = 0;
                 for (int64_t s = graph.level_pair_start[current];
                      s < graph.level_pair_start[current + 1]; ++s) {
-                    const int64_t k = graph.level_pairs[s];
-                    const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
-                    inside += resolve_pair(w, k, a, b, dt, NO_LOOKAHEAD, SHOCK, 0.0, {true, true});
+                    inside += resolve_pair(w, graph.level_pairs[s], dt, NO_LOOKAHEAD, SHOCK, 0.0,
+                                           {true, true});
                 }
                 // and the supports again: the last impulse of a sweep must not leave a body of
                 // the level moving into a frozen one (a box pressed sideways by its neighbour

@@ -175,8 +175,9 @@ Vec3 collision_lookahead(const BodyModel& model, double dt) {
     return {dt * dt * g.x, dt * dt * g.y, dt * dt * g.z};
 }
 
-int resolve_pair(WorldStep& w, int64_t k, int a, int b, double dt, Vec3 lookahead,
-                 ImpulseMode mode, double ramp_e, Movable movable) {
+int resolve_pair(WorldStep& w, int64_t k, double dt, Vec3 lookahead, ImpulseMode mode,
+                 double ramp_e, Movable movable) {
+    const int a = w.lists.pair_a[k];
     const ContactSet& set = w.scratch;
     const int64_t count = gather_pair(w, {k, a, 0.0}, dt, lookahead, set, 0);
     return resolve_patches(w, a, movable, set, std::min(count, set.depth.size), dt, mode, ramp_e);
@@ -289,7 +290,7 @@ void resolve_world_contacts(WorldStep& w, int64_t pairs, double dt, ImpulseMode 
                 if (ramp && alone(w, a, b) != (group == 1)) {
                     continue;
                 }
-                applied += resolve_pair(w, k, a, b, dt, lookahead, mode, ramp_e,
+                applied += resolve_pair(w, k, dt, lookahead, mode, ramp_e,
                                         {w.model.motion[a] == DYNAMIC, w.model.motion[b] == DYNAMIC});
             }
             if (applied == 0) {

@@ -57,11 +57,11 @@ void count_acting_pairs_of_bodies(WorldStep& w, int64_t pairs);
 // What the collision stage moves dynamic bodies by when predicting their poses: dt^2 g (m).
 Vec3 collision_lookahead(const BodyModel& model, double dt);
 
-// Resolve the contacts of pair k = (a, b) at their predicted poses (contacts.h, then
-// resolve_patches); returns the number of impulses applied. COLLISION uses the pair's
-// restitution, CONTACT ramp_e, SHOCK 0.
-int resolve_pair(WorldStep& w, int64_t k, int a, int b, double dt, Vec3 lookahead,
-                 ImpulseMode mode, double ramp_e, Movable movable);
+// Resolve the contacts of listed pair k at their predicted poses (contacts.h, then
+// resolve_patches, from its body a's side); returns the number of impulses applied.
+// COLLISION uses the pair's restitution, CONTACT ramp_e, SHOCK 0.
+int resolve_pair(WorldStep& w, int64_t k, double dt, Vec3 lookahead, ImpulseMode mode,
+                 double ramp_e, Movable movable);
 
 // Resolve body a's contacts in `set` (normals towards a; each against the body set.partner[i])
 // in stage `mode`; returns the number of impulses applied (solver.cpp says how).
