@@ -478,6 +478,24 @@ WAKE_UPS = {
 }
 
 
+def step_resting_world(change):
+    """resting_world_scene stepped 80 times with sleeping on and off, ``change(world)`` before
+    step 50: for each, every step's state bits and broad-phase runs (sleep on first)."""
+    config = rg.SolverConfig.for_scene(resting_world_scene())
+    runs = []
+    for sleep in (True, False):
+        world = rg.World(resting_world_scene(), config=dataclasses.replace(config, sleep=sleep))
+        states, broad = [], []
+        for t in range(80):
+            if t == 50:
+                change(world)
+            world.step(1)
+            states.append(state_bits(world))
+            broad.append(world.profile()["broad_phase"]["calls"])
+        runs.append((states, np.diff(broad)))
+    return runs
+
+
 @pytest.mark.parametrize("wake_up", WAKE_UPS)
 def test_a_world_at_rest_skips_its_steps_until_anything_changes(wake_up):
     """Once every dynamic body sleeps and nothing changes, a step runs no stage (the profile
@@ -485,21 +503,8 @@ def test_a_world_at_rest_skips_its_steps_until_anything_changes(wake_up):
     arrays, a force, a torque, a new mass, a kinematic body set moving. Every state and pair
     impulse is bit-identical to stepping with sleeping off, and the change takes effect in
     the step right after it."""
-    scene = resting_world_scene()
-    top = 5
-    config = rg.SolverConfig.for_scene(scene)
-    runs = {}
-    for sleep in (True, False):
-        world = rg.World(scene, config=dataclasses.replace(config, sleep=sleep))
-        states, broad = [], []
-        for t in range(80):
-            if t == 50:
-                WAKE_UPS[wake_up](world, top)
-            world.step(1)
-            states.append(state_bits(world))
-            broad.append(world.profile()["broad_phase"]["calls"])
-        runs[sleep] = states, np.diff(broad)
-    (states, broad), (states_awake, broad_awake) = runs[True], runs[False]
+    (states, broad), (states_awake, broad_awake) = step_resting_world(
+        lambda world: WAKE_UPS[wake_up](world, 5))
     for t, (one, other) in enumerate(zip(states, states_awake)):
         assert one == other, f"step {t}"
     assert (broad_awake == 1).all()
@@ -512,20 +517,8 @@ def test_a_world_at_rest_runs_the_first_step_of_another_dt():
     """A fixed point of the step at one dt is not known to be one at another: the first step
     after dt changes runs (the profile counts its broad phase), and every state and pair
     impulse stays bit-identical to stepping with sleeping off."""
-    scene = resting_world_scene()
-    config = rg.SolverConfig.for_scene(scene)
-    runs = {}
-    for sleep in (True, False):
-        world = rg.World(scene, config=dataclasses.replace(config, sleep=sleep))
-        states, broad = [], []
-        for t in range(80):
-            if t == 50:
-                world.dt = 1 / 100
-            world.step(1)
-            states.append(state_bits(world))
-            broad.append(world.profile()["broad_phase"]["calls"])
-        runs[sleep] = states, np.diff(broad)
-    (states, broad), (states_awake, _) = runs[True], runs[False]
+    (states, broad), (states_awake, _) = step_resting_world(
+        lambda world: setattr(world, "dt", 1 / 100))
     assert states == states_awake
     assert not broad[10:49].any()  # at rest at 1/240
     assert broad[49] == 1  # the first step at 1/100 ran
