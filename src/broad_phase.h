@@ -27,7 +27,8 @@ struct Aabb {
 struct PairLists {
     Span<Aabb> bounds;      // (n,) scratch
     Span<int64_t> order;    // (n,) body indices, kept between calls (sort and sweep starts
-                            //      from the last order: nearly sorted, O(n) to re-sort)
+                            //      from the last order: nearly sorted, O(n) to re-sort);
+                            //      brute force's scratch (a world never changes method)
     Span<int32_t> pair_a;   // (P,) out
     Span<int32_t> pair_b;   // (P,) out
     Span<int64_t> keys;     // (P,) sorting scratch
