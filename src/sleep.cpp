@@ -262,7 +262,13 @@ void mark_asleep(WorldStep& w, int64_t count, double dt) {
         all_asleep &= motion[i] != DYNAMIC || rest.asleep[i];
         if (motion[i] != DYNAMIC || !rest.resting[rest.island[i]]) {
             // a fixed point's snapshot is its state, just compared; a stopped body's is new
-            read_state(s, i, rest.snapshot.sub(static_cast<int64_t>(i) * SNAPSHOT, SNAPSHOT));
+            const Span<double> row = rest.snapshot.sub(static_cast<int64_t>(i) * SNAPSHOT, SNAPSHOT);
+            read_state(s, i, row);
+            if (pushed(s, i)) {
+                // this step is not the next one's: a force that holds a body still makes no
+                // fixed point once it stops. A NaN is never unchanged, so the island wakes
+                row[0] = std::nan("");
+            }
         }
         rest.previous_island[i] = rest.island[i];
         rest.previous_bodies[i] = rest.bodies[i];

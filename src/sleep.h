@@ -12,9 +12,10 @@
 // So if, at the start of a step, every body of an island and every static or kinematic body
 // it touches is exactly (bit for bit) as it was at the start of the last step, the island
 // has the same bodies and the same number of listed pairs as then, and no force, torque or
-// attachment acts on it, this step would leave it exactly where the last one did: where it
-// is. (Its pairs are then the same: the broad phase lists an island's pairs from its bodies'
-// and their partners' states, and a partner unchanged since the last step was listed then.)
+// attachment acts on it in this step or acted in the last, this step would leave it exactly
+// where the last one did: where it is. (Its pairs are then the same: the broad phase lists
+// an island's pairs from its bodies' and their partners' states, and a partner unchanged
+// since the last step was listed then.)
 // The island is then asleep for the step: its pairs are moved behind the awake pairs, which
 // are all the impulse stages see (their order kept); its bodies' velocities are put back
 // before the position update (which then moves them by the same velocities as the last

@@ -524,6 +524,32 @@ def test_a_world_at_rest_runs_the_first_step_of_another_dt():
     assert broad[49] == 1  # the first step at 1/100 ran
 
 
+def test_a_force_that_held_bodies_still_leaves_no_fixed_point_behind():
+    """A step under a force is not the step after it. A box held in the air by m g for three
+    steps is where the last step left it once the force stops, and falls; the top cube of a
+    settled stack pressed down for one step rests where it was, but its contacts then carry
+    less. Neither is asleep in the step after the force, and every state and pair impulse is
+    bit-identical to stepping with sleeping off."""
+    scene = rg.Scene()
+    scene.add_body(rg.Box((H,) * 3), mass=1.0, position=(0.0, 0.0, 1.0))
+    config = rg.SolverConfig.for_scene(scene)
+    runs = []
+    for sleep in (True, False):
+        world = rg.World(scene, config=dataclasses.replace(config, sleep=sleep))
+        for _ in range(3):
+            world.apply_force(0, -scene.gravity)
+            world.step(1)
+        assert world.position[0, 2] == 1.0  # held: the same state three steps running
+        world.step(100)
+        runs.append(world.position[0, 2])
+    assert runs[0] == runs[1] < 0.5
+    (states, _), (states_awake, _) = step_resting_world(
+        lambda world: world.apply_force(5, (0.0, 0.0, -5.0)))
+    assert states[50][:-1] == states[49][:-1]  # pressed: it did not move ...
+    assert states[50][-1] != states[49][-1]  # ... but its contacts carried the force
+    assert states == states_awake
+
+
 def test_a_slow_island_is_stopped_by_sleep_speed_and_sleeps_until_struck():
     """A 10-box pyramid moves by round-off (~1e-17 m a step), so it is no exact fixed point and
     never sleeps by default. With sleep_speed its island is stopped once every box has been
