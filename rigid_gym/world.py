@@ -8,8 +8,10 @@ State is held per body at the centre of mass in the principal frame (see ``rigid
 Every array has a leading world axis internally; a world built without ``num_worlds`` shows it
 dropped. The arrays live in the compiled core (``World.core``, a ``rigid_gym._core.StepContext``
 that owns every buffer the step uses); ``World.state`` and ``World.model`` are numpy views of
-them. Arrays returned by properties are read-only views: change state with the setters, which
-validate their input before anything reaches the core.
+them. ``World.model`` and the arrays returned by properties are read-only views: change them
+with the setters (``set_material`` for masses and materials), which validate their input
+before anything reaches the core and wake the bodies they change (a sleeping body's step is
+skipped on the grounds that nothing about it changed).
 """
 
 from __future__ import annotations
@@ -119,11 +121,12 @@ class World:
         c = self.core
         self.state = State(c.position, c.orientation, c.velocity, c.angular_momentum,
                            c.angular_velocity, c.rotation, c.force, c.torque)
-        self.model = Model(motion, c.inverse_mass, c.inverse_moments, c.friction, c.restitution,
-                           scene.gravity.copy())
+        self.model = Model(motion, *(_read_only(a) for a in self._materials()),
+                           _read_only(scene.gravity.copy()))
+        _read_only(motion)
         self.attached = Attachments(c.attach_parent, c.attach_offset_position,
                                     c.attach_offset_orientation)
-        for current, new in zip(self.model[1:5], _build_model(scene, self.num_worlds)[1:5]):
+        for current, new in zip(self._materials(), _build_model(scene, self.num_worlds)[1:5]):
             current[...] = new
         for current, new in zip(self.state, _build_state(scene, self.num_worlds)):
             current[...] = new
@@ -173,7 +176,7 @@ class World:
             raise ValueError("World.load: the scene needs another SolverConfig.for_scene than "
                              f"this world's ({SolverConfig.for_scene(scene)} vs {self.config}); "
                              "give the World an explicit config to load such scenes")
-        for current, new in zip(self.model[1:5], _build_model(scene, 1)[1:5]):
+        for current, new in zip(self._materials(), _build_model(scene, 1)[1:5]):
             current[w] = new[0]
         for current, new in zip(self.state, _build_state(scene, 1)):
             current[w] = new[0]
@@ -212,6 +215,12 @@ class World:
     def view(self, world: int) -> WorldView:
         """One world of a batched World, seen as an unbatched one (``WorldView``)."""
         return WorldView(self, self._worlds(world, "view"))
+
+    def _materials(self) -> tuple[np.ndarray, ...]:
+        """Writable views of the core's inverse_mass, inverse_moments, friction and restitution
+        (``Model``'s layout), for the methods that change them."""
+        c = self.core
+        return c.inverse_mass, c.inverse_moments, c.friction, c.restitution
 
     @property
     def time(self) -> float:
@@ -410,7 +419,7 @@ class World:
         i = self._body(body, "set_material")
         worlds = self._worlds(world, "set_material")
         self.core.forget(*self._range(worlds))
-        m = self.model
+        m = Model(self.model.motion, *self._materials(), self.model.gravity)
         name = f"body {i} ({self.scene.bodies[i].name!r})"
         if mass is not None:
             if m.motion[i] != DYNAMIC:
@@ -588,6 +597,12 @@ def _same_shape(a, b) -> bool:
         return False
     return all(np.array_equal(getattr(a, f.name), getattr(b, f.name))
                for f in dataclasses.fields(a))
+
+
+def _read_only(array: np.ndarray) -> np.ndarray:
+    """``array``, no longer writable through this name."""
+    array.flags.writeable = False
+    return array
 
 
 def _safe_inverse(x: np.ndarray) -> np.ndarray:

@@ -7,7 +7,7 @@ import pytest
 
 import rigid_gym as rg
 from rigid_gym.meshes import l_shape_mesh
-from rigid_gym.report.scenes import pile
+from rigid_gym.report.scenes import cube_stack, pile
 
 
 def mixed_scene():
@@ -301,3 +301,15 @@ def test_set_material_changes_mass_inertia_friction_and_restitution():
     np.testing.assert_allclose(world.velocity[:, box, 0], [1.0 / 4.0, 1.0 / 0.5], rtol=1e-15)
     np.testing.assert_array_equal(world.model.friction[:, box], [0.8, 0.8])
 
+
+
+def test_the_model_is_read_only_and_changes_through_set_material():
+    """A write into World.model would change a body without waking it (a sleeping body is
+    skipped because nothing about it changed), so every array of it is read-only;
+    set_material changes it."""
+    world = rg.World(cube_stack(1))
+    for array in world.model:
+        with pytest.raises(ValueError, match="read-only"):
+            array[...] = array
+    world.set_material(1, mass=2.0, friction=0.25)
+    assert world.model.inverse_mass[0, 1] == 0.5 and world.model.friction[0, 1] == 0.25
