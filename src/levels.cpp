@@ -85,33 +85,64 @@ void counting_sort(Span<const int64_t> keys, int64_t n, int64_t num_keys, Span<i
     }
 }
 
-void contact_levels(const Graph& graph, Span<const int32_t> motion, int64_t num_edges) {
-    const int64_t n = motion.size;
+int64_t graph_nodes(const Graph& graph, const PairLists& lists, int64_t pairs, int num_bodies) {
+    int64_t m = 0;
+    for (int64_t k = 0; k < pairs; ++k) {
+        for (const int64_t v : {static_cast<int64_t>(lists.pair_a[k]), static_cast<int64_t>(lists.pair_b[k])}) {
+            if (graph.node_of[v] < 0) {
+                graph.node_of[v] = 0;
+                graph.nodes[m++] = v;
+            }
+        }
+    }
+    if (m * 16 < num_bodies) {  // few: sorting them costs less than a scan of every body
+        std::sort(graph.nodes.data, graph.nodes.data + m);
+    } else {
+        int64_t at = 0;
+        for (int64_t v = 0; v < num_bodies; ++v) {
+            if (graph.node_of[v] >= 0) {
+                graph.nodes[at++] = v;
+            }
+        }
+    }
+    for (int64_t i = 0; i < m; ++i) {
+        graph.node_of[graph.nodes[i]] = i;
+    }
+    return m;
+}
+
+void forget_nodes(const Graph& graph, int64_t m) {
+    for (int64_t i = 0; i < m; ++i) {
+        graph.node_of[graph.nodes[i]] = -1;
+    }
+}
+
+void contact_levels(const Graph& graph, Span<const int32_t> motion, int64_t num_edges, int64_t m) {
     // CSR form of the edges, each node's successors in edge order
-    for (int64_t v = 0; v < n + 1; ++v) {
+    for (int64_t v = 0; v < m + 1; ++v) {
         graph.edge_start[v] = 0;
     }
     for (int64_t k = 0; k < num_edges; ++k) {
-        graph.edge_start[graph.edge_from[k] + 1] += 1;
+        graph.edge_start[graph.node_of[graph.edge_from[k]] + 1] += 1;
     }
-    for (int64_t v = 0; v < n; ++v) {
+    for (int64_t v = 0; v < m; ++v) {
         graph.edge_start[v + 1] += graph.edge_start[v];
         graph.counts[v] = graph.edge_start[v];
     }
     for (int64_t k = 0; k < num_edges; ++k) {
-        graph.targets[graph.counts[graph.edge_from[k]]++] = graph.edge_to[k];
+        graph.targets[graph.counts[graph.node_of[graph.edge_from[k]]]++] = graph.node_of[graph.edge_to[k]];
     }
-    const int64_t count = strongly_connected_components(graph, n);
+    const int64_t count = strongly_connected_components(graph, m);
     for (int64_t c = 0; c < count; ++c) {
         graph.component_level[c] = 1;
     }
     // topological order: components from the highest number down
-    for (int64_t v = 0; v < n; ++v) {
+    for (int64_t v = 0; v < m; ++v) {
         graph.level[v] = count - 1 - graph.component[v];  // used as the sort key
     }
-    counting_sort({graph.level.data, graph.level.size}, n, count, graph.counts, graph.by_component);
-    for (int64_t m = 0; m < n; ++m) {
-        const int64_t v = graph.by_component[m];
+    counting_sort({graph.level.data, graph.level.size}, m, count, graph.counts, graph.by_component);
+    for (int64_t i = 0; i < m; ++i) {
+        const int64_t v = graph.by_component[i];
         const int64_t c = graph.component[v];
         for (int64_t k = graph.edge_start[v]; k < graph.edge_start[v + 1]; ++k) {
             const int64_t u = graph.targets[k];
@@ -121,55 +152,57 @@ void contact_levels(const Graph& graph, Span<const int32_t> motion, int64_t num_
             }
         }
     }
-    for (int64_t v = 0; v < n; ++v) {
-        graph.level[v] = motion[v] == DYNAMIC ? graph.component_level[graph.component[v]] : 0;
+    for (int64_t v = 0; v < m; ++v) {
+        graph.level[v] = motion[graph.nodes[v]] == DYNAMIC ? graph.component_level[graph.component[v]] : 0;
     }
+    counting_sort({graph.level.data, graph.level.size}, m, m + 1, graph.counts, graph.by_level);
 }
 
-void pairs_by_body(const Graph& graph, const PairLists& lists, int64_t pairs, int num_bodies) {
+void pairs_by_body(const Graph& graph, const PairLists& lists, int64_t pairs, int64_t m) {
     const Span<int64_t> start = graph.body_pair_start, fill = graph.counts;
-    for (int64_t v = 0; v < num_bodies + 1; ++v) {
+    for (int64_t v = 0; v < m + 1; ++v) {
         start[v] = 0;
     }
     for (int64_t k = 0; k < pairs; ++k) {
         if (graph.touching[k]) {
-            start[lists.pair_a[k] + 1] += 1;
-            start[lists.pair_b[k] + 1] += 1;
+            start[graph.node_of[lists.pair_a[k]] + 1] += 1;
+            start[graph.node_of[lists.pair_b[k]] + 1] += 1;
         }
     }
-    for (int64_t v = 0; v < num_bodies; ++v) {
+    for (int64_t v = 0; v < m; ++v) {
         start[v + 1] += start[v];
         fill[v] = start[v];
     }
     for (int64_t k = 0; k < pairs; ++k) {
         if (graph.touching[k]) {
-            graph.body_pairs[fill[lists.pair_a[k]]++] = k;
-            graph.body_pairs[fill[lists.pair_b[k]]++] = k;
+            graph.body_pairs[fill[graph.node_of[lists.pair_a[k]]]++] = k;
+            graph.body_pairs[fill[graph.node_of[lists.pair_b[k]]]++] = k;
         }
     }
 }
 
-void pairs_by_level(const Graph& graph, const PairLists& lists, int64_t pairs, int num_bodies) {
+void pairs_by_level(const Graph& graph, const PairLists& lists, int64_t pairs, int64_t m) {
     const Span<int64_t> start = graph.level_pair_start, fill = graph.counts;
+    const auto level_of = [&](int body) { return graph.level[graph.node_of[body]]; };
     const auto inside = [&](int64_t k) {
-        const int64_t la = graph.level[lists.pair_a[k]];
-        return graph.touching[k] && la > 0 && la == graph.level[lists.pair_b[k]];
+        const int64_t la = level_of(lists.pair_a[k]);
+        return graph.touching[k] && la > 0 && la == level_of(lists.pair_b[k]);
     };
-    for (int64_t l = 0; l < num_bodies + 2; ++l) {
+    for (int64_t l = 0; l < m + 2; ++l) {
         start[l] = 0;
     }
     for (int64_t k = 0; k < pairs; ++k) {
         if (inside(k)) {
-            start[graph.level[lists.pair_a[k]] + 1] += 1;
+            start[level_of(lists.pair_a[k]) + 1] += 1;
         }
     }
-    for (int64_t l = 0; l < num_bodies + 1; ++l) {
+    for (int64_t l = 0; l < m + 1; ++l) {
         start[l + 1] += start[l];
         fill[l] = start[l];
     }
     for (int64_t k = 0; k < pairs; ++k) {
         if (inside(k)) {
-            graph.level_pairs[fill[graph.level[lists.pair_a[k]]]++] = k;
+            graph.level_pairs[fill[level_of(lists.pair_a[k])]++] = k;
         }
     }
 }

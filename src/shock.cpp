@@ -75,20 +75,21 @@ int64_t build_contact_graph(WorldStep& w, int64_t pairs, double dt) {
     return edges;
 }
 
-// One body of the level being processed against all its frozen supports at once: their
-// contacts (normals turned towards body) go into w.wide and are resolved as patches, so a box
-// straddling two frozen boxes is held by both (one support alone could hold it only with its
-// centre of pressure on an edge).
-int resolve_supported_body(WorldStep& w, int body, int64_t current, double dt) {
+// One body (graph node `node`) of the level being processed against all its frozen supports
+// at once: their contacts (normals turned towards the body) go into w.wide and are resolved
+// as patches, so a box straddling two frozen boxes is held by both (one support alone could
+// hold it only with its centre of pressure on an edge).
+int resolve_supported_body(WorldStep& w, int64_t node, int64_t current, double dt) {
     const Graph& graph = w.graph;
     const ContactSet& wide = w.wide;
+    const int body = static_cast<int>(graph.nodes[node]);
     int64_t count = 0;
     int applied = 0;
-    for (int64_t s = graph.body_pair_start[body]; s < graph.body_pair_start[body + 1]; ++s) {
+    for (int64_t s = graph.body_pair_start[node]; s < graph.body_pair_start[node + 1]; ++s) {
         const int64_t k = graph.body_pairs[s];
         const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
         const int other = a == body ? b : a;
-        if (w.model.motion[other] == DYNAMIC && graph.level[other] >= current) {
+        if (w.model.motion[other] == DYNAMIC && graph.level[graph.node_of[other]] >= current) {
             continue;  // not frozen: resolved pair by pair
         }
         const int64_t found = gather_pair(w, {k, body, -GRAPH_MARGIN}, dt, NO_LOOKAHEAD, wide, count);
@@ -102,24 +103,24 @@ int resolve_supported_body(WorldStep& w, int body, int64_t current, double dt) {
     return applied + resolve_patches(w, body, {true, false}, wide, count, dt, SHOCK, 0.0);
 }
 
-// resolve_supported_body for bodies by_level[start:end] of level `current`; impulses applied.
+// resolve_supported_body for nodes by_level[start:end] of level `current`; impulses applied.
 int resolve_level_supports(WorldStep& w, int64_t start, int64_t end, int64_t current, double dt) {
     int applied = 0;
     for (int64_t s = start; s < end; ++s) {
-        applied += resolve_supported_body(w, static_cast<int>(w.graph.by_level[s]), current, dt);
+        applied += resolve_supported_body(w, w.graph.by_level[s], current, dt);
     }
     return applied;
 }
 
-// The levels in order, each against its frozen supports, then its inside pairs (see top).
-void resolve_levels(WorldStep& w, double dt) {
+// The levels of the m nodes in order, each against its frozen supports, then its inside
+// pairs (see top).
+void resolve_levels(WorldStep& w, int64_t m, double dt) {
     const Graph& graph = w.graph;
-    const int n = w.num_bodies();
     int64_t start = 0;
-    while (start < n) {
+    while (start < m) {
         const int64_t current = graph.level[graph.by_level[start]];
         int64_t end = start;
-        while (end < n && graph.level[graph.by_level[end]] == current) {
+        while (end < m && graph.level[graph.by_level[end]] == current) {
             end += 1;
         }
         if (current > 0) {
@@ -166,18 +167,18 @@ bool brought_together(WorldStep& w, int64_t pairs, double dt) {
 
 void propagate_world_shock(WorldStep& w, int64_t pairs, double dt) {
     const Graph& graph = w.graph;
-    const int n = w.num_bodies();
+    const int64_t m = graph_nodes(graph, w.lists, pairs, w.num_bodies());
     for (int round = 0; round < SHOCK_ROUNDS; ++round) {
         const int64_t edges = build_contact_graph(w, pairs, dt);
-        contact_levels(graph, w.model.motion, edges);
-        pairs_by_body(graph, w.lists, pairs, n);
-        pairs_by_level(graph, w.lists, pairs, n);
-        counting_sort({graph.level.data, graph.level.size}, n, n + 1, graph.counts, graph.by_level);
-        resolve_levels(w, dt);
+        contact_levels(graph, w.model.motion, edges, m);
+        pairs_by_body(graph, w.lists, pairs, m);
+        pairs_by_level(graph, w.lists, pairs, m);
+        resolve_levels(w, m, dt);
         if (!brought_together(w, pairs, dt)) {
             break;
         }
     }
+    forget_nodes(graph, m);
 }
 
 }  // namespace rg

@@ -95,10 +95,11 @@ void GraphBuffers::allocate(int num_worlds, int64_t num_bodies, int64_t num_pair
     for (Array<int64_t>* edges : {&edge_from, &edge_to, &targets, &body_pairs}) {
         edges->assign(b * 2 * num_pairs, 0);
     }
-    for (Array<int64_t>* per_body : {&component, &component_level, &by_component, &index, &low,
-                                     &stack, &calls, &next_edge, &level, &by_level}) {
+    for (Array<int64_t>* per_body : {&nodes, &component, &component_level, &by_component, &index,
+                                     &low, &stack, &calls, &next_edge, &level, &by_level}) {
         per_body->assign(b * num_bodies, 0);
     }
+    node_of.assign(b * num_bodies, -1);
     on_stack.assign(b * num_bodies, 0);
     edge_start.assign(b * (num_bodies + 1), 0);
     body_pair_start.assign(b * (num_bodies + 1), 0);
@@ -109,7 +110,8 @@ void GraphBuffers::allocate(int num_worlds, int64_t num_bodies, int64_t num_pair
 
 Graph GraphBuffers::rows(int w) {
     const int64_t n = bodies, e = 2 * pairs;
-    return {world_rows(touching, w, pairs),      world_rows(edge_from, w, e),
+    return {world_rows(nodes, w, n),             world_rows(node_of, w, n),
+            world_rows(touching, w, pairs),      world_rows(edge_from, w, e),
             world_rows(edge_to, w, e),           world_rows(edge_start, w, n + 1),
             world_rows(targets, w, e),           world_rows(component, w, n),
             world_rows(component_level, w, n),   world_rows(by_component, w, n),

@@ -39,12 +39,17 @@ struct Settings {
 
 // Shock propagation's work rows (n bodies, P pair capacity).
 struct Graph {
+    // The graph's nodes are the bodies of the stage's pairs (graph_nodes): with sleeping, the
+    // bodies of the awake pairs, so an asleep body costs the stage nothing. Rows marked
+    // "per node" are indexed by node; a node's body is nodes[node].
+    Span<int64_t> nodes;            // (n,) the bodies of the pairs, in index order
+    Span<int64_t> node_of;          // (n,) each body's node, -1 outside the stage
     Span<uint8_t> touching;         // (P,) the pair touches at the predicted poses
     Span<int64_t> edge_from;        // (2P,) support edges, lower body to upper
     Span<int64_t> edge_to;          // (2P,)
-    Span<int64_t> edge_start;       // (n + 1,) CSR form of the edges
-    Span<int64_t> targets;          // (2P,)
-    Span<int64_t> component;        // (n,) Tarjan's strongly connected components
+    Span<int64_t> edge_start;       // (n + 1,) CSR form of the edges, per node
+    Span<int64_t> targets;          // (2P,) nodes
+    Span<int64_t> component;        // (n,) per node: Tarjan's strongly connected components
     Span<int64_t> component_level;  // (n,)
     Span<int64_t> by_component;     // (n,)
     Span<int64_t> index;            // (n,) Tarjan's bookkeeping
@@ -53,10 +58,10 @@ struct Graph {
     Span<int64_t> stack;            // (n,)
     Span<int64_t> calls;            // (n,)
     Span<int64_t> next_edge;        // (n,)
-    Span<int64_t> level;            // (n,) each body's level, 0 for static and kinematic
-    Span<int64_t> by_level;         // (n,) the bodies by level
+    Span<int64_t> level;            // (n,) per node: its level, 0 for static and kinematic
+    Span<int64_t> by_level;         // (n,) the nodes by level
     Span<int64_t> counts;           // (n + 2,) counting sorts
-    Span<int64_t> body_pair_start;  // (n + 1,) each body's touching pairs, CSR
+    Span<int64_t> body_pair_start;  // (n + 1,) each node's touching pairs, CSR
     Span<int64_t> body_pairs;       // (2P,)
     Span<int64_t> level_pair_start; // (n + 2,) the touching pairs inside each level, CSR
     Span<int64_t> level_pairs;      // (P,)
@@ -172,9 +177,9 @@ struct ContactCacheBuffers {
 // The batched buffers behind a Graph: B worlds of n bodies and P pairs.
 struct GraphBuffers {
     Array<uint8_t> touching, on_stack;
-    Array<int64_t> edge_from, edge_to, edge_start, targets, component, component_level,
-        by_component, index, low, stack, calls, next_edge, level, by_level, counts,
-        body_pair_start, body_pairs, level_pair_start, level_pairs;
+    Array<int64_t> nodes, node_of, edge_from, edge_to, edge_start, targets, component,
+        component_level, by_component, index, low, stack, calls, next_edge, level, by_level,
+        counts, body_pair_start, body_pairs, level_pair_start, level_pairs;
     int64_t bodies = 0, pairs = 0;
 
     void allocate(int num_worlds, int64_t num_bodies, int64_t num_pairs);
