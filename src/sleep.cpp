@@ -153,6 +153,11 @@ void carry_impulses(WorldStep& w, int64_t awake, int64_t count) {
     const int64_t end[2] = {*rest.previous_awake, *rest.previous_count};
     for (int64_t k = awake; k < count; ++k) {
         const int64_t key = static_cast<int64_t>(w.lists.pair_a[k]) * n + w.lists.pair_b[k];
+        if (at[1] < end[1] && rest.previous_keys[at[1]] == key) {
+            // most asleep pairs were asleep in the last step too: next in its asleep run
+            w.pair_impulse[k] = rest.previous_impulse[at[1]++];
+            continue;
+        }
         Vec3 impulse = {0.0, 0.0, 0.0};  // not found: not reached, an island with a new pair is awake
         for (int r = 0; r < 2; ++r) {
             while (at[r] < end[r] && rest.previous_keys[at[r]] < key) {
