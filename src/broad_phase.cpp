@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace rg {
 
@@ -127,6 +128,30 @@ int64_t add_pair(int i, int j, Span<const int32_t> motion, const PairLists& list
     return count + 1;
 }
 
+// A pair's key a n + b back to (a, b): key / n and key % n through the reciprocal, corrected
+// by one. Two 64-bit divisions a pair were most of a short list's sorting (q < 2^31 is off by
+// less than 2^-21 before the truncation).
+struct KeyDecoder {
+    int64_t n;
+    double inverse;
+
+    explicit KeyDecoder(int64_t num_bodies)
+        : n(num_bodies), inverse(1.0 / static_cast<double>(num_bodies)) {}
+
+    std::pair<int32_t, int32_t> operator()(int64_t key) const {
+        int64_t q = static_cast<int64_t>(static_cast<double>(key) * inverse);
+        int64_t r = key - q * n;
+        if (r < 0) {
+            q -= 1;
+            r += n;
+        } else if (r >= n) {
+            q += 1;
+            r -= n;
+        }
+        return {static_cast<int32_t>(q), static_cast<int32_t>(r)};
+    }
+};
+
 // Keys below this many are insertion-sorted: a radix pass costs its 256 counters however few
 // keys it moves (a sleeping pyramid with one rolling ball tests ~2 pairs a step).
 constexpr int64_t FEW_KEYS = 64;
@@ -186,22 +211,11 @@ void sort_pairs(const PairLists& lists, int64_t tested, int64_t count, int64_t n
             c += 1;
         }
     }
-    // key / n and key % n through the reciprocal, corrected by one: two 64-bit divisions a
-    // pair were most of a short list's sorting (q < 2^31 is off by less than 2^-21 before
-    // the truncation)
-    const double inverse = 1.0 / static_cast<double>(num_bodies);
+    const KeyDecoder decode(num_bodies);
     for (int64_t k = 0; k < count; ++k) {
-        int64_t q = static_cast<int64_t>(static_cast<double>(merged[k]) * inverse);
-        int64_t r = merged[k] - q * num_bodies;
-        if (r < 0) {
-            q -= 1;
-            r += num_bodies;
-        } else if (r >= num_bodies) {
-            q += 1;
-            r -= num_bodies;
-        }
-        lists.pair_a[k] = static_cast<int32_t>(q);
-        lists.pair_b[k] = static_cast<int32_t>(r);
+        const auto [a, b] = decode(merged[k]);
+        lists.pair_a[k] = a;
+        lists.pair_b[k] = b;
     }
 }
 
@@ -311,8 +325,9 @@ int64_t find_world_pairs(const Geometry& geo, Span<const int32_t> motion,
         }
     }
     const int64_t tested = count;
+    const KeyDecoder decode(n);
     for (int64_t k = 0; carrying && k < carried.keys.size; ++k) {
-        const int a = static_cast<int>(carried.keys[k] / n), b = static_cast<int>(carried.keys[k] % n);
+        const auto [a, b] = decode(carried.keys[k]);
         if (known(a, b)) {
             count = add_pair(a, b, motion, lists, count);
         }
