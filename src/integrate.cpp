@@ -120,10 +120,11 @@ void refresh_inverse_inertia(const BodyStates& bodies, const BodyModel& model,
     }
 }
 
-void update_velocities(const BodyStates& bodies, const BodyModel& model, double dt) {
+void update_velocities(const BodyStates& bodies, const BodyModel& model, double dt,
+                       Span<const uint8_t> asleep) {
     const Vec3 g = model.gravity;
     for (int64_t i = 0; i < bodies.position.size; ++i) {
-        if (model.motion[i] != DYNAMIC) {
+        if (model.motion[i] != DYNAMIC || (asleep.size > 0 && asleep[i])) {
             continue;
         }
         const Vec3 f = bodies.force[i], tau = bodies.torque[i];

@@ -43,8 +43,11 @@ void refresh_inverse_inertia(const BodyStates& bodies, const BodyModel& model,
                              Span<const uint8_t> kept = {});
 
 // V += dt (g + F/M), L += dt tau, omega = I(t)^-1 L, for the dynamic bodies (with
-// bodies.inverse_inertia).
-void update_velocities(const BodyStates& bodies, const BodyModel& model, double dt);
+// bodies.inverse_inertia), but those with asleep[i] set (sleep.h; asleep empty without
+// sleeping): their step ends with the velocities it started with, and no impulse stage sees
+// them in between.
+void update_velocities(const BodyStates& bodies, const BodyModel& model, double dt,
+                       Span<const uint8_t> asleep = {});
 
 // X += dt V; advance q by the rotation of the step; refresh R and omega. Dynamic bodies rotate
 // in sub-steps of at most a quarter turn, each re-evaluating omega from L at the current

@@ -32,11 +32,11 @@ int64_t list_pairs(WorldStep& w, double dt, double acceleration, bool carried) {
 }
 
 // Copy every body's velocity, angular momentum and angular velocity into w.start (keep), or
-// back from it (one body, or all with body = -1).
-void keep_velocities(WorldStep& w, bool keep, int body = -1) {
+// back from it.
+void keep_velocities(WorldStep& w, bool keep) {
     const int64_t n = w.num_bodies();
     const BodyStates& s = w.bodies;
-    for (int64_t i = body < 0 ? 0 : body; i < (body < 0 ? n : body + 1); ++i) {
+    for (int64_t i = 0; i < n; ++i) {
         if (keep) {
             w.start[i] = s.velocity[i];
             w.start[n + i] = s.angular_momentum[i];
@@ -49,10 +49,16 @@ void keep_velocities(WorldStep& w, bool keep, int body = -1) {
     }
 }
 
+// The bodies asleep in this step (rest.asleep), or none without sleeping.
+Span<const uint8_t> asleep_bodies(const WorldStep& w) {
+    return w.settings->sleep ? Span<const uint8_t>{w.rest.asleep.data, w.rest.asleep.size}
+                             : Span<const uint8_t>{};
+}
+
 // True when some body, at its current velocity, moves further in dt than its box was grown.
 // Called before the position update, which moves a body by its current velocities: no
 // acceleration term (the broad phase's bounds the velocity update's gravity). An asleep body
-// has its velocities of the step's start back, which its box was grown for.
+// keeps the velocities it started the step with, which its box was grown for.
 bool outgrown(const WorldStep& w, double dt) {
     const bool sleeping = w.settings->sleep;
     for (int i = 0; i < w.num_bodies(); ++i) {
@@ -92,7 +98,7 @@ double impulse_stages(WorldStep& w, double dt, int64_t count, double since) {
         resolve_world_contacts(w, count, dt, COLLISION, c.collision_passes);
         since = lap(w.timers, COLLISION_STAGE, since);
     }
-    update_velocities(w.bodies, w.model, dt);
+    update_velocities(w.bodies, w.model, dt, asleep_bodies(w));
     since = lap(w.timers, VELOCITY_STAGE, since);
     if (c.contact_passes > 0 && count > 0) {
         find_contacts(w, count, dt, {0.0, 0.0, 0.0});
@@ -161,13 +167,6 @@ int64_t step_world(WorldStep& w, int64_t steps, double dt) {
         // 1-4. collision, velocity update, contact, shock propagation
         since = impulse_stages(w, dt, *w.rest.awake_pairs, since);
         // 5. position update with the final velocities
-        if (c.sleep) {  // the velocity update gave the asleep bodies gravity's share
-            for (int i = 0; i < w.num_bodies(); ++i) {
-                if (w.rest.asleep[i]) {
-                    keep_velocities(w, false, i);
-                }
-            }
-        }
         if (c.broad_phase) {
             for (int relist = 0; relist < MAX_RELISTS && outgrown(w, dt); ++relist) {
                 since = lap(w.timers, POSITION_STAGE, since, 0);
@@ -202,8 +201,7 @@ int64_t step_world(WorldStep& w, int64_t steps, double dt) {
         count_acting_pairs_of_bodies(w, *w.pair_count);
         update_positions(w.bodies, w.model, dt, c.rotation_order, c.keep_energy,
                          {w.pairs_of.data, w.pairs_of.size},
-                         c.sleep ? Span<const uint8_t>{w.rest.asleep.data, w.rest.asleep.size}
-                                 : Span<const uint8_t>{});
+                         asleep_bodies(w));
         for (int i = 0; i < w.num_bodies(); ++i) {
             w.bodies.force[i] = {0.0, 0.0, 0.0};
             w.bodies.torque[i] = {0.0, 0.0, 0.0};
