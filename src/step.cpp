@@ -198,7 +198,9 @@ int64_t step_world(WorldStep& w, int64_t steps, double dt) {
         if (c.overlap_correction > 0.0 && *w.contacts.detected) {
             correct_overlap(w, *w.rest.awake_pairs, dt, c.overlap_correction);
         }
-        count_acting_pairs_of_bodies(w, *w.pair_count);
+        // the asleep pairs' bodies are asleep or not dynamic: the position update reads no
+        // count of theirs
+        count_acting_pairs_of_bodies(w, *w.rest.awake_pairs);
         update_positions(w.bodies, w.model, dt, c.rotation_order, c.keep_energy,
                          {w.pairs_of.data, w.pairs_of.size},
                          asleep_bodies(w));
