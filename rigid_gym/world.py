@@ -121,9 +121,9 @@ class World:
         c = self.core
         self.state = State(c.position, c.orientation, c.velocity, c.angular_momentum,
                            c.angular_velocity, c.rotation, c.force, c.torque)
-        self.model = Model(motion, *(_read_only(a) for a in self._materials()),
-                           _read_only(scene.gravity.copy()))
-        _read_only(motion)
+        self.model = Model(motion, *self._materials(), scene.gravity.copy())
+        for array in self.model:  # read-only through this name; set_material writes the core's
+            array.flags.writeable = False
         self.attached = Attachments(c.attach_parent, c.attach_offset_position,
                                     c.attach_offset_orientation)
         for current, new in zip(self._materials(), _build_model(scene, self.num_worlds)[1:5]):
@@ -216,7 +216,7 @@ class World:
         """One world of a batched World, seen as an unbatched one (``WorldView``)."""
         return WorldView(self, self._worlds(world, "view"))
 
-    def _materials(self) -> tuple[np.ndarray, ...]:
+    def _materials(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Writable views of the core's inverse_mass, inverse_moments, friction and restitution
         (``Model``'s layout), for the methods that change them."""
         c = self.core
@@ -597,12 +597,6 @@ def _same_shape(a, b) -> bool:
         return False
     return all(np.array_equal(getattr(a, f.name), getattr(b, f.name))
                for f in dataclasses.fields(a))
-
-
-def _read_only(array: np.ndarray) -> np.ndarray:
-    """``array``, no longer writable through this name."""
-    array.flags.writeable = False
-    return array
 
 
 def _safe_inverse(x: np.ndarray) -> np.ndarray:
