@@ -35,6 +35,7 @@ replays one bit for bit (``--verify``) or regenerates the shipped ones
 from __future__ import annotations
 
 import argparse
+import importlib.metadata
 import importlib.util
 import os
 import shutil
@@ -291,13 +292,23 @@ def replay(files: list[str]) -> int:
 
 
 def find_rerun() -> str | None:
-    """The ``rerun`` executable installed with this Python's rerun-sdk (its scripts folder,
-    then the interpreter's folder), else the first on PATH, else None."""
+    """The ``rerun`` executable installed with this Python's rerun-sdk, else the first on
+    PATH, else None. The SDK's install record names its script (in the scripts folder of the
+    environment that holds the SDK: a venv's own, or its base's when the venv sees the base's
+    packages); without a record, this interpreter's scripts folder and folder are tried."""
     name = "rerun.exe" if os.name == "nt" else "rerun"
-    for folder in (sysconfig.get_path("scripts"), os.path.dirname(sys.executable)):
-        candidate = os.path.join(folder, name)
+    candidates = []
+    try:
+        sdk = importlib.metadata.distribution("rerun-sdk")
+        candidates += [str(sdk.locate_file(f)) for f in sdk.files or ()
+                       if f.name == name and f.parent.name in ("bin", "Scripts")]
+    except importlib.metadata.PackageNotFoundError:
+        pass
+    candidates += [os.path.join(folder, name)
+                   for folder in (sysconfig.get_path("scripts"), os.path.dirname(sys.executable))]
+    for candidate in candidates:
         if os.path.isfile(candidate) and os.access(candidate, os.X_OK):
-            return candidate
+            return os.path.normpath(candidate)
     return shutil.which("rerun")
 
 
