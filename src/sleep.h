@@ -17,9 +17,9 @@
 // an island's pairs from its bodies' and their partners' states, and a partner unchanged
 // since the last step was listed then.)
 // The island is then asleep for the step: its pairs are moved behind the awake pairs, which
-// are all the impulse stages see (their order kept); its bodies' velocities are put back
-// before the position update (which then moves them by the same velocities as the last
-// step's, i.e. nowhere: a fixed point); and each of its pairs reports the impulse it
+// are all the impulse stages see (their order kept); its bodies are left out of the
+// velocity and position updates (which would give them the last step's velocities and move
+// them by those, i.e. nowhere: a fixed point); and each of its pairs reports the impulse it
 // transmitted in the last step, as stepping it would. A settled stack is such a fixed point;
 // anything touching it (a moving body listed with one of its bodies joins the island and
 // changes it), a force, a moving kinematic body it touches, wakes it.
