@@ -274,9 +274,10 @@ void mark_asleep(WorldStep& w, int64_t count, double dt) {
             // a fixed point's snapshot is its state, just compared; a stopped body's is new
             const Span<double> row = rest.snapshot.sub(static_cast<int64_t>(i) * SNAPSHOT, SNAPSHOT);
             read_state(s, i, row);
-            if (pushed(s, i)) {
+            if (pushed(s, i) || w.attached.parent[i] >= 0) {
                 // this step is not the next one's: a force that holds a body still makes no
-                // fixed point once it stops. A NaN is never unchanged, so the island wakes
+                // fixed point once it stops, nor does a holder once the body is let go (even
+                // by a write to the attachments). A NaN is never unchanged, so the island wakes
                 row[0] = std::nan("");
             }
         }
@@ -338,6 +339,16 @@ void keep_pair_impulses(WorldStep& w) {
     }
     *rest.previous_count = *w.pair_count;
     *rest.previous_awake = *rest.awake_pairs;
+}
+
+void forget_moved(WorldStep& w) {
+    const Rest& rest = w.rest;
+    for (int i = 0; i < w.num_bodies(); ++i) {
+        if (w.model.motion[i] == DYNAMIC && !rest.asleep[i] &&
+            !unchanged(w.bodies, i, snapshot_of(rest, i))) {
+            rest.snapshot[static_cast<int64_t>(i) * SNAPSHOT] = std::nan("");
+        }
+    }
 }
 
 void wake_world(WorldStep& w, int64_t count) {

@@ -11,9 +11,10 @@
 //
 // So if, at the start of a step, every body of an island and every static or kinematic body
 // it touches is exactly (bit for bit) as it was at the start of the last step, the island
-// has the same bodies and the same number of listed pairs as then, and no force, torque or
-// attachment acts on it in this step or acted in the last, this step would leave it exactly
-// where the last one did: where it is. (Its pairs are then the same: the broad phase lists
+// has the same bodies and the same number of listed pairs as then, no force, torque or
+// attachment acts on it in this step or acted in the last, and the last step left it where
+// it began (forget_moved: not a body put back between steps), this step would leave it
+// exactly where the last one did: where it is. (Its pairs are then the same: the broad phase lists
 // an island's pairs from its bodies' and their partners' states, and a partner unchanged
 // since the last step was listed then.)
 // The island is then asleep for the step: its pairs are moved behind the awake pairs, which
@@ -80,6 +81,12 @@ int64_t move_asleep_last(WorldStep& w, int64_t count);
 // At the end of the impulse stages: the step's listed pairs and their impulses, for the
 // next step's asleep pairs.
 void keep_pair_impulses(WorldStep& w);
+
+// At the end of a step: forget the snapshot of every awake dynamic body the step moved. A
+// state equal to the last step's start is a fixed point only if that step left it there:
+// a body put back between steps (set_pose and set_velocity before each step, an impulse
+// that cancels gravity's) starts each step as the last one did, yet each step moves it.
+void forget_moved(WorldStep& w);
 
 // No body sleeps in the rest of this step (all its count pairs are awake) or in the next.
 void wake_world(WorldStep& w, int64_t count);

@@ -208,6 +208,9 @@ int64_t step_world(WorldStep& w, int64_t steps, double dt) {
             w.bodies.force[i] = {0.0, 0.0, 0.0};
             w.bodies.torque[i] = {0.0, 0.0, 0.0};
         }
+        if (c.sleep) {
+            forget_moved(w);
+        }
         since = lap(w.timers, POSITION_STAGE, since);
     }
     place_attached(w.bodies, w.attached);
