@@ -50,7 +50,8 @@ Pose predict_pose(const WorldStep& w, int i, double dt, Vec3 lookahead) {
 }
 
 // Detect pair k at the current prediction into the pool's free rows; false when they do not
-// fit (the pair is then detected in every pass for the rest of the step).
+// fit (the pair is then detected in every pass for the rest of the step, which is run again:
+// pool_overflowed).
 bool detect_pair(WorldStep& w, int64_t k, double dt, Vec3 lookahead) {
     ContactCache& c = w.contacts;
     const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
@@ -81,7 +82,8 @@ bool detect_pair(WorldStep& w, int64_t k, double dt, Vec3 lookahead) {
 }
 
 // The narrow phase at the current prediction straight into set (Settings::detect_every_pass,
-// or a pair the pool could not hold), contacts deeper than `threshold`.
+// or a pair the pool could not hold in a step that will be run again), contacts deeper than
+// `threshold`.
 int64_t collide_now(WorldStep& w, const Gather& g, double dt, Vec3 lookahead, const ContactSet& set,
                     int64_t at) {
     const int a = w.lists.pair_a[g.k], b = w.lists.pair_b[g.k];
@@ -162,5 +164,9 @@ int64_t gather_pair(WorldStep& w, const Gather& g, double dt, Vec3 lookahead,
 }
 
 int64_t contact_rows_needed(const WorldStep& w) { return *w.contacts.needed; }
+
+bool pool_overflowed(const WorldStep& w) {
+    return *w.contacts.detected && *w.contacts.needed > *w.contacts.used;
+}
 
 }  // namespace rg

@@ -23,8 +23,14 @@
 // formulation, kept to measure the difference).
 //
 // The pool of contact rows has a capacity per world that grows between steps to what the
-// last step needed; a pair that does not fit is detected in every pass for the rest of that
-// step, so nothing is ever dropped and the step allocates nothing.
+// last step needed. A step whose contacts do not all fit (pool_overflowed) is abandoned
+// before its position update and run again whole once the pool has grown (step.cpp), as a
+// step whose pairs overflow their buffers is: a row the pool could not hold never changes a
+// trajectory, so a world steps bit for bit the same alone or beside a batch's larger worlds,
+// and with sleeping on or off (asleep pairs take no rows). The rerun step wakes its world;
+// with Settings::sleep_speed, whose stops change trajectories anyway, that restarts its
+// islands' slow time, and an island the abandoned step stopped stays stopped. The step
+// allocates nothing.
 #pragma once
 
 #include "contact_set.h"
@@ -62,5 +68,10 @@ int64_t gather_pair(WorldStep& w, const Gather& g, double dt, Vec3 lookahead,
 
 // Contacts found, and their rows, per world: what the pool should hold in the next step.
 int64_t contact_rows_needed(const WorldStep& w);
+
+// Did some pair's contacts not fit the pool in this step? Its stages then ran with that pair
+// found anew in every pass (gather_pair), which rounds differently: the step must be run
+// again once the pool has grown.
+bool pool_overflowed(const WorldStep& w);
 
 }  // namespace rg

@@ -90,13 +90,17 @@ void find_contacts(WorldStep& w, int64_t count, double dt, Vec3 lookahead) {
 // The collision, velocity update, contact and shock stages over the first `count` listed
 // pairs (the awake ones, with sleeping), each counted and timed (timers.h) from `since` on;
 // returns where the next stage starts. A stage with nothing to do (no pair, or switched off)
-// is not run.
+// is not run, nor is any after a stage whose contacts overflowed the pool (the step is run
+// again: contacts.h).
 double impulse_stages(WorldStep& w, double dt, int64_t count, double since) {
     const Settings& c = *w.settings;
     if (c.collision_passes > 0 && count > 0) {
         find_contacts(w, count, dt, collision_lookahead(w.model, dt));
         resolve_world_contacts(w, count, dt, COLLISION, c.collision_passes);
         since = lap(w.timers, COLLISION_STAGE, since);
+        if (pool_overflowed(w)) {
+            return since;
+        }
     }
     update_velocities(w.bodies, w.model, dt, asleep_bodies(w));
     since = lap(w.timers, VELOCITY_STAGE, since);
@@ -104,6 +108,9 @@ double impulse_stages(WorldStep& w, double dt, int64_t count, double since) {
         find_contacts(w, count, dt, {0.0, 0.0, 0.0});
         resolve_world_contacts(w, count, dt, CONTACT, c.contact_passes);
         since = lap(w.timers, CONTACT_STAGE, since);
+        if (pool_overflowed(w)) {
+            return since;
+        }
     }
     if (c.shock_sweeps > 0 && c.gravity > 0.0 && count > 0) {
         find_contacts(w, count, dt, {0.0, 0.0, 0.0});
@@ -111,6 +118,19 @@ double impulse_stages(WorldStep& w, double dt, int64_t count, double since) {
         since = lap(w.timers, SHOCK_STAGE, since);
     }
     return since;
+}
+
+// After impulse stages whose contacts overflowed the pool: put the velocities back as the
+// stages found them (the impulse stages change nothing else of the bodies) and wake the
+// world, whose sleeping bookkeeping has taken this step in (sleep.h: waking changes no bit).
+// The step is then run again whole, once the pool has grown.
+bool abandoned_for_rows(WorldStep& w) {
+    if (!pool_overflowed(w)) {
+        return false;
+    }
+    keep_velocities(w, false);
+    wake_world(w, *w.pair_count);
+    return true;
 }
 
 }  // namespace
@@ -166,6 +186,9 @@ int64_t step_world(WorldStep& w, int64_t steps, double dt) {
         since = lap(w.timers, BROAD_STAGE, since, c.broad_phase ? 1 : 0);
         // 1-4. collision, velocity update, contact, shock propagation
         since = impulse_stages(w, dt, *w.rest.awake_pairs, since);
+        if (abandoned_for_rows(w)) {
+            return done;
+        }
         // 5. position update with the final velocities
         if (c.broad_phase) {
             for (int relist = 0; relist < MAX_RELISTS && outgrown(w, dt); ++relist) {
@@ -190,6 +213,9 @@ int64_t step_world(WorldStep& w, int64_t steps, double dt) {
                 *w.contacts.detected = 0;
                 since = lap(w.timers, BROAD_STAGE, since, 0);
                 since = impulse_stages(w, dt, more, since);
+                if (abandoned_for_rows(w)) {
+                    return done;
+                }
             }
         }
         if (c.sleep) {
