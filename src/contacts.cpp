@@ -49,13 +49,24 @@ Pose predict_pose(const WorldStep& w, int i, double dt, Vec3 lookahead) {
     return {x, rotation_from_quaternion(q)};
 }
 
-// Detect pair k at the current prediction into the pool's free rows; false when they do not
-// fit (the pair is then detected in every pass for the rest of the step, which is run again:
-// pool_overflowed).
-bool detect_pair(WorldStep& w, int64_t k, double dt, Vec3 lookahead) {
+// Body i's pose predicted for detect_contacts, found once for all its pairs: a body is in
+// several, and its pose costs a turn by its angular velocity (a sine and a cosine) and the
+// rotation matrix of the result.
+const Pose& detection_pose(WorldStep& w, int i, double dt, Vec3 lookahead) {
+    const ContactCache& c = w.contacts;
+    if (c.posed[i] != *c.detections) {
+        c.pose[i] = predict_pose(w, i, dt, lookahead);
+        c.posed[i] = *c.detections;
+    }
+    return c.pose[i];
+}
+
+// Detect pair k, its bodies predicted at poses pa and pb, into the pool's free rows; false
+// when they do not fit (the pair is then detected in every pass for the rest of the step,
+// which is run again: pool_overflowed).
+bool detect_pair(WorldStep& w, int64_t k, const Pose& pa, const Pose& pb, double dt, Vec3 lookahead) {
     ContactCache& c = w.contacts;
     const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
-    const Pose pa = predict_pose(w, a, dt, lookahead), pb = predict_pose(w, b, dt, lookahead);
     const int64_t first = *c.used;
     const int64_t found = collide_bodies(*w.geo, a, b, pa, pb, SPECULATIVE_MARGIN,
                                          {c.point, c.normal, c.depth}, first);
@@ -107,11 +118,14 @@ int64_t collide_now(WorldStep& w, const Gather& g, double dt, Vec3 lookahead, co
 void detect_contacts(WorldStep& w, int64_t pairs, double dt, Vec3 lookahead) {
     *w.contacts.used = 0;
     *w.contacts.needed = 0;
+    *w.contacts.detections += 1;
     for (int64_t k = 0; k < pairs; ++k) {
         if (w.settings->detect_every_pass) {
             w.contacts.first[k] = -1;
         } else {
-            detect_pair(w, k, dt, lookahead);
+            const Pose& pa = detection_pose(w, w.lists.pair_a[k], dt, lookahead);
+            const Pose& pb = detection_pose(w, w.lists.pair_b[k], dt, lookahead);
+            detect_pair(w, k, pa, pb, dt, lookahead);
         }
     }
     *w.contacts.detected = 1;
@@ -130,7 +144,8 @@ int64_t gather_pair(WorldStep& w, const Gather& g, double dt, Vec3 lookahead,
     const double drift = bound(da) + bound(ta) * w.body_reach[a] + bound(db) +
                          bound(tb) * w.body_reach[b];
     if (drift > REDETECT_DRIFT) {
-        if (!detect_pair(w, g.k, dt, lookahead)) {
+        const Pose pa = predict_pose(w, a, dt, lookahead), pb = predict_pose(w, b, dt, lookahead);
+        if (!detect_pair(w, g.k, pa, pb, dt, lookahead)) {
             return collide_now(w, g, dt, lookahead, set, at);
         }
         da = ta = db = tb = {0.0, 0.0, 0.0};

@@ -55,6 +55,13 @@ ContactSet ContactSetBuffers::rows(int w) {
             world_rows(centre_b, w, contacts)};
 }
 
+void ContactCacheBuffers::allocate_bodies(int num_worlds, int64_t num_bodies) {
+    bodies = num_bodies;
+    pose.assign(num_worlds * num_bodies, {});
+    posed.assign(num_worlds * num_bodies, -1);
+    detections.assign(num_worlds, 0);
+}
+
 void ContactCacheBuffers::allocate_pairs(int num_worlds, int64_t num_pairs) {
     pairs = num_pairs;
     first.assign(num_worlds * num_pairs, -1);
@@ -84,7 +91,9 @@ ContactCache ContactCacheBuffers::view(int w) {
             world_rows(point, w, rows),     world_rows(normal, w, rows),
             world_rows(depth, w, rows),     world_rows(arm_a, w, rows),
             world_rows(arm_b, w, rows),     &used[w],
-            &needed[w],                     &detected[w]};
+            &needed[w],                     &detected[w],
+            world_rows(pose, w, bodies),    world_rows(posed, w, bodies),
+            &detections[w]};
 }
 
 void GraphBuffers::allocate(int num_worlds, int64_t num_bodies, int64_t num_pairs) {
@@ -186,6 +195,7 @@ StepContext::StepContext(int num_worlds, Geometry geometry, std::vector<int32_t>
     kept_.assign(b * n, 0);
     intact_.assign(b * n, 0);
     previous_dt_.assign(b, 0.0);
+    contacts_.allocate_bodies(num_worlds_, n);
     allocate_pairs(std::max<int64_t>(8, 2 * n));
     contacts_.allocate_rows(num_worlds_, 8 * pair_capacity_);
 }

@@ -93,7 +93,8 @@ struct Rest {
     double* previous_dt;              // s, the last step's dt; 0: none since forgotten
 };
 
-// Contacts found once per step (contacts.h): per listed pair (P,) and a pool of rows (Q,).
+// Contacts found once per step (contacts.h): per listed pair (P,), a pool of rows (Q,), and
+// per body (n,) its pose predicted for them.
 struct ContactCache {
     Span<int64_t> first;       // (P,) pair k's first row, -1: detected in every pass instead
     Span<int64_t> count;       // (P,)
@@ -111,6 +112,10 @@ struct ContactCache {
     int64_t* used;             // rows in use
     int64_t* needed;           // rows this step asked for (the pool grows to it between steps)
     int64_t* detected;         // 1 once the step's contacts are found (reset by the broad phase)
+    Span<Pose> pose;           // (n,) each body's predicted pose at the latest detection of
+                               //      every pair, where posed[i] == *detections
+    Span<int64_t> posed;       // (n,)
+    int64_t* detections;       // such detections so far
 };
 
 // Floats of a body's state compared by sleeping: position 3, orientation 4, velocity 3,
@@ -160,15 +165,18 @@ struct ContactSetBuffers {
     ContactSet rows(int w);
 };
 
-// The batched buffers behind a ContactCache: B worlds of P pairs and Q rows.
+// The batched buffers behind a ContactCache: B worlds of n bodies, P pairs and Q rows.
 struct ContactCacheBuffers {
     Array<int64_t> first, count;
     Array<Vec3> centre_a, centre_b, shift_a, shift_b, turn_a, turn_b;
     Array<Vec3> point, normal, arm_a, arm_b;
     Array<double> depth;
     Array<int64_t> used, needed, detected;
-    int64_t pairs = 0, rows = 0;
+    Array<Pose> pose;
+    Array<int64_t> posed, detections;
+    int64_t bodies = 0, pairs = 0, rows = 0;
 
+    void allocate_bodies(int num_worlds, int64_t num_bodies);
     void allocate_pairs(int num_worlds, int64_t num_pairs);
     void allocate_rows(int num_worlds, int64_t num_rows);
     ContactCache view(int w);
