@@ -23,14 +23,18 @@
 // formulation, kept to measure the difference).
 //
 // The pool of contact rows has a capacity per world that grows between steps to what the
-// last step needed. A step whose contacts do not all fit (pool_overflowed) is abandoned
-// before its position update and run again whole once the pool has grown (step.cpp), as a
-// step whose pairs overflow their buffers is: a row the pool could not hold never changes a
-// trajectory, so a world steps bit for bit the same alone or beside a batch's larger worlds,
-// and with sleeping on or off (asleep pairs take no rows). The rerun step wakes its world;
-// with Settings::sleep_speed, whose stops change trajectories anyway, that restarts its
-// islands' slow time, and an island the abandoned step stopped stays stopped. The step
-// allocates nothing.
+// last step needed. A step whose contacts do not all fit in its impulse stages
+// (pool_overflowed) is abandoned before its position update and run again whole once the
+// pool has grown (step.cpp), as a step whose pairs overflow their buffers is. The overlap
+// correction after them needs no rerun: it asks at the detection's own margin with the final
+// velocities, so a pair it must find again at the current prediction gets the same narrow
+// phase call whether its rows fit (drift 0 from there) or not (collide_now). So a row the pool
+// could not hold never changes a trajectory: a world steps bit for bit the same alone or
+// beside a batch's larger worlds, and with sleeping on or off (asleep pairs take no rows).
+// The rerun step wakes its world; with Settings::sleep_speed, whose stops change trajectories
+// anyway, that restarts its islands' slow time, and an island the abandoned step stopped
+// stays stopped (a growth of the pair buffers restarts every world's). The step allocates
+// nothing.
 #pragma once
 
 #include "contact_set.h"

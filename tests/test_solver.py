@@ -15,7 +15,7 @@ from rigid_gym.report.scenes import cube_stack, pyramid, pyramid_and_ball
 
 G = 9.81
 H = scenes.CUBE_HALF  # half edge of the test cubes, m
-CONTACT = _core.STAGES.index("contact")
+BROAD = _core.STAGES.index("broad_phase")
 
 
 def apexes(e, dt, count, h0=1.0, r=0.05):
@@ -590,18 +590,23 @@ def test_a_body_put_back_before_each_step_is_no_fixed_point(put_back):
         assert one == other, f"step {t}"
 
 
-def test_the_contact_pool_never_changes_a_trajectory():
+@pytest.mark.parametrize("restitution", [0.0, 0.3])
+def test_the_contact_pool_never_changes_a_trajectory(restitution):
     """The contact pool grows to what a step needs; a step whose contacts do not fit is run
     again once it has (src/contacts.h). 48 cubes lying apart are set into a 4 x 4 x 3 block
-    of touching faces (far more contact rows than the pool first holds). Alone, the world
-    outgrows its pool in that step; in a batch whose other world was set into the block first,
-    the pool has grown already. Both, with sleeping on and off, give the same bits in every
-    step; and the lone world did run a step again (else the test would pass vacuously)."""
+    of touching faces (far more contact rows than the pool first holds) beside 8 cubes that
+    rest apart throughout (asleep, taking no rows, with sleeping on). Alone, the world
+    outgrows its pool in that step (in the contact stage, or with restitution in the
+    collision stage); in a batch whose other world was set into the block first, the pool
+    has grown already. Both, with sleeping on and off, give the same bits in every step; and
+    the lone world did run a step again, with cubes asleep in it (else the test would pass
+    vacuously)."""
     scene = rg.Scene()
-    scene.add_ground(friction=0.5)
-    for k in range(48):
-        scene.add_body(rg.Box((H,) * 3), mass=0.1, friction=0.5,
+    scene.add_ground(friction=0.5, restitution=restitution)
+    for k in range(56):
+        scene.add_body(rg.Box((H,) * 3), mass=0.1, friction=0.5, restitution=restitution,
                        position=(0.2 * (k % 8) - 0.7, 0.2 * (k // 8) - 0.5, H))
+    resting = list(range(49, 57))
 
     def into_block(world, which):
         for k in range(48):
@@ -609,7 +614,7 @@ def test_the_contact_pool_never_changes_a_trajectory():
             world.set_pose(1 + k, position=(1.0 + 2 * H * i, 2 * H * j, H + 2 * H * layer),
                            orientation=(1.0, 0.0, 0.0, 0.0), world=which)
 
-    runs, contact_calls = {}, {}
+    runs, broad_calls = {}, {}
     for num_worlds in (1, 2):
         for sleep in (True, False):
             config = rg.SolverConfig.for_scene(scene, sleep=sleep)
@@ -617,20 +622,21 @@ def test_the_contact_pool_never_changes_a_trajectory():
             if num_worlds == 2:
                 into_block(world, 1)
             world.step(20)
-            before = world.core.stage_calls[0, CONTACT]
+            assert world.core.asleep[0, resting].all() == sleep
+            before = world.core.stage_calls[0, BROAD]
             into_block(world, 0)
             states = []
             for _ in range(60):
                 world.step(1)
                 states.append([a[0].tobytes() for a in world.state])
             runs[num_worlds, sleep] = states
-            contact_calls[num_worlds, sleep] = world.core.stage_calls[0, CONTACT] - before
+            broad_calls[num_worlds, sleep] = world.core.stage_calls[0, BROAD] - before
     first = runs[1, True]
     for key, states in runs.items():
         for t, (one, other) in enumerate(zip(first, states)):
             assert one == other, f"{key}: step {t}"
-    assert contact_calls[1, True] > contact_calls[2, True]
-    assert contact_calls[1, False] > contact_calls[2, False]
+    assert broad_calls[1, True] > broad_calls[2, True]
+    assert broad_calls[1, False] > broad_calls[2, False]
 
 
 def test_a_slow_island_is_stopped_by_sleep_speed_and_sleeps_until_struck():
