@@ -33,8 +33,7 @@
 // beside a batch's larger worlds, and with sleeping on or off (asleep pairs take no rows).
 // The rerun step wakes its world; with Settings::sleep_speed, whose stops change trajectories
 // anyway, that restarts its islands' slow time, and an island the abandoned step stopped
-// stays stopped (a growth of the pair buffers restarts every world's). The step allocates
-// nothing.
+// stays stopped. The step allocates nothing.
 #pragma once
 
 #include "contact_set.h"

@@ -34,9 +34,10 @@
 //
 // What the comparison cannot see wakes a world from Python (StepContext::forget): new masses,
 // friction or restitution, a reset or load, attaching and detaching. A relist in a step
-// (step.cpp) wakes its world too, and so does a growth of the pair buffers or of the
-// contact pool. The test of exactness is stepping with sleeping on and off and comparing
-// every state and impulse bit for bit (tests/test_solver.py).
+// (step.cpp) wakes its world too, and so does a step run again because its contacts
+// overflowed the pool (contacts.h). A growth of the pair buffers wakes nothing: every world
+// keeps its last step's pairs. The test of exactness is stepping with sleeping on and off and
+// comparing every state and impulse bit for bit (tests/test_solver.py).
 #pragma once
 
 #include "world.h"

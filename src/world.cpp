@@ -206,17 +206,20 @@ void StepContext::allocate_pairs(int64_t capacity) {
         pair_a.assign(b * capacity, 0);
         pair_b.assign(b * capacity, 0);
         pair_impulse.assign(b * capacity, {0.0, 0.0, 0.0});
+        previous_keys_.assign(b * capacity, 0);
+        previous_impulse_.assign(b * capacity, {0.0, 0.0, 0.0});
     } else {
+        // every world keeps its last step's pairs, from which the next step carries its asleep
+        // ones (sleep.h): a world whose pairs overflowed abandoned its step before its
+        // sleeping bookkeeping changed, or woke (a relist), so no world is forgotten
         resize_rows(pair_a, num_worlds_, pair_capacity_, capacity);
         resize_rows(pair_b, num_worlds_, pair_capacity_, capacity);
         resize_rows(pair_impulse, num_worlds_, pair_capacity_, capacity);
+        resize_rows(previous_keys_, num_worlds_, pair_capacity_, capacity);
+        resize_rows(previous_impulse_, num_worlds_, pair_capacity_, capacity);
     }
     keys_.assign(b * capacity, 0);
     spare_.assign(b * capacity, 0);
-    // the last step's pairs are not carried over: nothing sleeps in the next step
-    previous_keys_.assign(b * capacity, 0);
-    previous_impulse_.assign(b * capacity, {0.0, 0.0, 0.0});
-    forget(0, num_worlds_);
     graph_.allocate(num_worlds_, num_bodies_, capacity);
     contacts_.allocate_pairs(num_worlds_, capacity);
     pair_capacity_ = capacity;

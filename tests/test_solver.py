@@ -639,6 +639,40 @@ def test_the_contact_pool_never_changes_a_trajectory(restitution):
     assert broad_calls[1, False] > broad_calls[2, False]
 
 
+def test_a_neighbour_outgrowing_the_pair_buffers_leaves_a_world_as_it_is():
+    """The pair buffers of a batch grow when one world lists more pairs than they hold; the
+    other worlds keep their last step's pairs and their sleeping bookkeeping. With
+    sleep_speed, where a forgotten world would count its islands' slow time afresh, a
+    pyramid's world steps the same bits alone and beside a world whose 48 cubes are set into
+    a block (its pairs outgrow the buffers) while the pyramid is slowing down; and the
+    pyramid was stopped, asleep, by the end (else the test would pass vacuously)."""
+    scene = pyramid(4)
+    first = len(scene.bodies)
+    for k in range(48):
+        scene.add_body(rg.Box((H,) * 3), mass=0.1, friction=0.5,
+                       position=(3.0 + 0.2 * (k % 8), 0.2 * (k // 8), H))
+    config = rg.SolverConfig.for_scene(scene, sleep_speed=0.01)
+    runs = {}
+    for num_worlds in (1, 2):
+        world = rg.World(scene, num_worlds=num_worlds, config=config)
+        states = []
+        for t in range(200):
+            if t == 100 and num_worlds == 2:
+                for k in range(48):
+                    i, j, layer = k % 4, (k // 4) % 4, k // 16
+                    world.set_pose(first + k, position=(5.0 + 2 * H * i, 2 * H * j,
+                                                        H + 2 * H * layer),
+                                   orientation=(1.0, 0.0, 0.0, 0.0), world=1)
+            world.step(1)
+            states.append([a[0].tobytes() for a in world.state])
+        runs[num_worlds] = states
+        asleep = world.core.asleep[0, 1:first].all()
+    assert world.core.pair_counts[1] > 2 * len(scene.bodies)  # more than the buffers held
+    for t, (one, other) in enumerate(zip(runs[1], runs[2])):
+        assert one == other, f"step {t}"
+    assert asleep
+
+
 def test_a_slow_island_is_stopped_by_sleep_speed_and_sleeps_until_struck():
     """A 10-box pyramid moves by round-off (~1e-17 m a step), so it is no exact fixed point and
     never sleeps by default. With sleep_speed its island is stopped once every box has been
