@@ -90,17 +90,13 @@ void find_contacts(WorldStep& w, int64_t count, double dt, Vec3 lookahead) {
 // The collision, velocity update, contact and shock stages over the first `count` listed
 // pairs (the awake ones, with sleeping), each counted and timed (timers.h) from `since` on;
 // returns where the next stage starts. A stage with nothing to do (no pair, or switched off)
-// is not run, nor is any after a stage whose contacts overflowed the pool (the step is run
-// again: contacts.h).
+// is not run.
 double impulse_stages(WorldStep& w, double dt, int64_t count, double since) {
     const Settings& c = *w.settings;
     if (c.collision_passes > 0 && count > 0) {
         find_contacts(w, count, dt, collision_lookahead(w.model, dt));
         resolve_world_contacts(w, count, dt, COLLISION, c.collision_passes);
         since = lap(w.timers, COLLISION_STAGE, since);
-        if (pool_overflowed(w)) {
-            return since;
-        }
     }
     update_velocities(w.bodies, w.model, dt, asleep_bodies(w));
     since = lap(w.timers, VELOCITY_STAGE, since);
@@ -108,9 +104,6 @@ double impulse_stages(WorldStep& w, double dt, int64_t count, double since) {
         find_contacts(w, count, dt, {0.0, 0.0, 0.0});
         resolve_world_contacts(w, count, dt, CONTACT, c.contact_passes);
         since = lap(w.timers, CONTACT_STAGE, since);
-        if (pool_overflowed(w)) {
-            return since;
-        }
     }
     if (c.shock_sweeps > 0 && c.gravity > 0.0 && count > 0) {
         find_contacts(w, count, dt, {0.0, 0.0, 0.0});

@@ -9,8 +9,8 @@ namespace rg {
 // stage into w.timers; returns how many were done. Fewer means the pair buffers were too
 // small for the next step (nothing of that step was applied; the world's pair_count says how
 // many pairs it needs), or its contact pool was (its velocities were put back and the world
-// woken: contacts.h; contact_rows_needed says how many rows). Forces and torques act during the first step and are cleared by its
-// position update.
+// woken: contacts.h; contact_rows_needed says how many rows). Forces and torques act during
+// the first step and are cleared by its position update.
 int64_t step_world(WorldStep& w, int64_t steps, double dt);
 
 // Advance every world of the context by `steps` steps (step_world), sharing ranges of worlds

@@ -590,6 +590,15 @@ def test_a_body_put_back_before_each_step_is_no_fixed_point(put_back):
         assert one == other, f"step {t}"
 
 
+def into_block(world, first, x, which):
+    """Set the 48 cubes from body ``first`` on into a 4 x 4 x 3 block of touching faces whose
+    first corner cube stands at (x, 0) m, in world ``which``."""
+    for k in range(48):
+        i, j, layer = k % 4, (k // 4) % 4, k // 16
+        world.set_pose(first + k, position=(x + 2 * H * i, 2 * H * j, H + 2 * H * layer),
+                       orientation=(1.0, 0.0, 0.0, 0.0), world=which)
+
+
 @pytest.mark.parametrize("restitution", [0.0, 0.3])
 def test_the_contact_pool_never_changes_a_trajectory(restitution):
     """The contact pool grows to what a step needs; a step whose contacts do not fit is run
@@ -607,24 +616,17 @@ def test_the_contact_pool_never_changes_a_trajectory(restitution):
         scene.add_body(rg.Box((H,) * 3), mass=0.1, friction=0.5, restitution=restitution,
                        position=(0.2 * (k % 8) - 0.7, 0.2 * (k // 8) - 0.5, H))
     resting = list(range(49, 57))
-
-    def into_block(world, which):
-        for k in range(48):
-            i, j, layer = k % 4, (k // 4) % 4, k // 16
-            world.set_pose(1 + k, position=(1.0 + 2 * H * i, 2 * H * j, H + 2 * H * layer),
-                           orientation=(1.0, 0.0, 0.0, 0.0), world=which)
-
     runs, broad_calls = {}, {}
     for num_worlds in (1, 2):
         for sleep in (True, False):
             config = rg.SolverConfig.for_scene(scene, sleep=sleep)
             world = rg.World(scene, num_worlds=num_worlds, config=config)
             if num_worlds == 2:
-                into_block(world, 1)
+                into_block(world, 1, x=1.0, which=1)
             world.step(20)
             assert world.core.asleep[0, resting].all() == sleep
             before = world.core.stage_calls[0, BROAD]
-            into_block(world, 0)
+            into_block(world, 1, x=1.0, which=0)
             states = []
             for _ in range(60):
                 world.step(1)
@@ -658,11 +660,7 @@ def test_a_neighbour_outgrowing_the_pair_buffers_leaves_a_world_as_it_is():
         states = []
         for t in range(200):
             if t == 100 and num_worlds == 2:
-                for k in range(48):
-                    i, j, layer = k % 4, (k // 4) % 4, k // 16
-                    world.set_pose(first + k, position=(5.0 + 2 * H * i, 2 * H * j,
-                                                        H + 2 * H * layer),
-                                   orientation=(1.0, 0.0, 0.0, 0.0), world=1)
+                into_block(world, first, x=5.0, which=1)
             world.step(1)
             states.append([a[0].tobytes() for a in world.state])
         runs[num_worlds] = states
