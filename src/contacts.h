@@ -23,7 +23,7 @@
 // formulation, kept to measure the difference).
 //
 // The pool of contact rows has a capacity per world that grows between steps to what the
-// last step needed. A step whose contacts do not all fit in its impulse stages
+// world's own last step needed (world.h: not what other worlds of its batch needed). A step whose contacts do not all fit in its impulse stages
 // (pool_overflowed) is abandoned before its position update and run again whole once the
 // pool has grown (step.cpp), as a step whose pairs overflow their buffers is. The overlap
 // correction after them needs no rerun: it asks at the detection's own margin with the final
@@ -33,7 +33,8 @@
 // beside a batch's larger worlds, and with sleeping on or off (asleep pairs take no rows).
 // The rerun step wakes its world; with Settings::sleep_speed, whose stops change trajectories
 // anyway, that restarts its islands' slow time, and an island the abandoned step stopped
-// stays stopped. The step allocates nothing.
+// stays stopped: the same alone and in any batch, since the world's own pool decides the
+// rerun. The step allocates nothing.
 #pragma once
 
 #include "contact_set.h"

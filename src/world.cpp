@@ -81,6 +81,22 @@ void ContactCacheBuffers::allocate_rows(int num_worlds, int64_t num_rows) {
     }
     depth.assign(num_worlds * num_rows, 0.0);
     detected.assign(num_worlds, 0);
+    limit.assign(num_worlds, num_rows);
+}
+
+void ContactCacheBuffers::fit_rows(int num_worlds) {
+    int64_t largest = rows;
+    for (int w = 0; w < num_worlds; ++w) {
+        if (needed[w] > limit[w]) {
+            limit[w] = 2 * needed[w];
+            largest = std::max(largest, limit[w]);
+        }
+    }
+    if (largest > rows) {
+        const Array<int64_t> kept = limit;
+        allocate_rows(num_worlds, largest);
+        limit = kept;
+    }
 }
 
 ContactCache ContactCacheBuffers::view(int w) {
@@ -88,9 +104,9 @@ ContactCache ContactCacheBuffers::view(int w) {
             world_rows(centre_a, w, pairs), world_rows(centre_b, w, pairs),
             world_rows(shift_a, w, pairs),  world_rows(shift_b, w, pairs),
             world_rows(turn_a, w, pairs),   world_rows(turn_b, w, pairs),
-            world_rows(point, w, rows),     world_rows(normal, w, rows),
-            world_rows(depth, w, rows),     world_rows(arm_a, w, rows),
-            world_rows(arm_b, w, rows),     &used[w],
+            point.rows(w * rows, limit[w]), normal.rows(w * rows, limit[w]),
+            depth.rows(w * rows, limit[w]), arm_a.rows(w * rows, limit[w]),
+            arm_b.rows(w * rows, limit[w]), &used[w],
             &needed[w],                     &detected[w],
             world_rows(pose, w, bodies),    world_rows(posed, w, bodies),
             &detections[w]};
@@ -225,15 +241,7 @@ void StepContext::allocate_pairs(int64_t capacity) {
     pair_capacity_ = capacity;
 }
 
-void StepContext::fit_contact_rows() {
-    int64_t needed = 0;
-    for (int w = 0; w < num_worlds_; ++w) {
-        needed = std::max(needed, contacts_.needed[w]);
-    }
-    if (needed > contacts_.rows) {
-        contacts_.allocate_rows(num_worlds_, 2 * needed);
-    }
-}
+void StepContext::fit_contact_rows() { contacts_.fit_rows(num_worlds_); }
 
 void StepContext::grow_pairs(int64_t needed) {
     if (needed > pair_capacity_) {

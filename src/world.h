@@ -166,19 +166,26 @@ struct ContactSetBuffers {
 };
 
 // The batched buffers behind a ContactCache: B worlds of n bodies, P pairs and Q rows.
+// World w may use the first limit[w] <= Q of its rows: a limit grows only with what its own
+// world's steps needed, so whether a step overflows (and is run again, which wakes the
+// world: contacts.h) is the same alone and beside any other worlds in a batch.
 struct ContactCacheBuffers {
     Array<int64_t> first, count;
     Array<Vec3> centre_a, centre_b, shift_a, shift_b, turn_a, turn_b;
     Array<Vec3> point, normal, arm_a, arm_b;
     Array<double> depth;
-    Array<int64_t> used, needed, detected;
+    Array<int64_t> used, needed, detected, limit;
     Array<Pose> pose;
     Array<int64_t> posed, detections;
     int64_t bodies = 0, pairs = 0, rows = 0;
 
     void allocate_bodies(int num_worlds, int64_t num_bodies);
     void allocate_pairs(int num_worlds, int64_t num_pairs);
+    // Q = num_rows rows per world, every world's limit Q.
     void allocate_rows(int num_worlds, int64_t num_rows);
+    // Each world whose last step needed more rows than its limit gets twice that need as its
+    // limit; Q grows to the largest limit (the rows are found again in every step).
+    void fit_rows(int num_worlds);
     ContactCache view(int w);
 };
 
@@ -213,7 +220,7 @@ public:
     // Make room for at least `needed` pairs per world, keeping the pairs listed so far.
     void grow_pairs(int64_t needed);
 
-    // Make the contact pool at least as large as the last step of any world needed.
+    // Let each world's contact pool hold what its last step needed (ContactCacheBuffers).
     void fit_contact_rows();
 
     // No body of worlds [first, last) sleeps in their next step: what changed cannot be seen
