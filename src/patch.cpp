@@ -280,15 +280,19 @@ struct LeverReach {
 LeverReach lever_reach(const PairLevers& pair, const ContactSet& set, int64_t seed, int64_t count,
                        Vec3 n, double dt) {
     int64_t closest = seed;
+    bool apart = false;
     for (int64_t i = seed; i < count; ++i) {
-        if (set.group[i] == seed && set.gap[i] < set.gap[closest]) {
-            closest = i;
+        if (set.group[i] == seed) {
+            closest = set.gap[i] < set.gap[closest] ? i : closest;
+            apart = apart || set.gap[i] > CLOSED_GAP;
         }
     }
     const Vec3 p = set.point[closest];
     const double reach = closing_reach(pair.model, dt);
-    if (-set.depth[closest] > reach / dt + REST_SPEED) {
-        return {reach, p, 0.0};  // the pivot strikes: no body held at rest by it
+    if (!apart || -set.depth[closest] > reach / dt + REST_SPEED) {
+        // every point touches (none asks its reach: point_closable), or the pivot strikes:
+        // no body held at rest by it
+        return {reach, p, 0.0};
     }
     return {reach, p, normal_coupling(pair, n, p, p)};
 }
@@ -301,14 +305,22 @@ double point_reach(const PairLevers& pair, const LeverReach& lever, Vec3 n, Vec3
     return lever.base * std::max(1.0, faster);
 }
 
+// May contact i close its gap within the step (closable with its point_reach)? A point
+// that touches already (most of a resting patch's) closes nothing, whatever its reach: the
+// reach, a coupling through both bodies' inertia, is only worked out for one that is apart.
+bool point_closable(const PairLevers& pair, const LeverReach& lever, const ContactSet& set,
+                    int64_t i, Vec3 n) {
+    const double gap = set.gap[i];
+    return gap > CLOSED_GAP && closable(gap, point_reach(pair, lever, n, set.point[i]));
+}
+
 // Contact i's target normal velocity t_i (normal_targets below).
 double point_target(const PairLevers& pair, const LeverReach& lever, const ContactSet& set,
                     int64_t i, Vec3 n, double e, double dt) {
     const double v = set.depth[i];
     const double target = -e * v;
-    return closable(set.gap[i], point_reach(pair, lever, n, set.point[i]))
-               ? std::max(v, std::min(target, -set.gap[i] / dt))
-               : target;
+    return point_closable(pair, lever, set, i, n) ? std::max(v, std::min(target, -set.gap[i] / dt))
+                                                  : target;
 }
 
 struct Targets {
@@ -322,8 +334,7 @@ Targets normal_targets(const PairLevers& pair, const LeverReach& lever, const Co
     Targets out = {-e * vn, {-e * dot(w, d[0]), tips > 1 ? -e * dot(w, d[1]) : 0.0}};
     bool closing = false;
     for (int64_t i = seed; i < count; ++i) {
-        closing = closing || (set.group[i] == seed &&
-                              closable(set.gap[i], point_reach(pair, lever, n, set.point[i])));
+        closing = closing || (set.group[i] == seed && point_closable(pair, lever, set, i, n));
     }
     if (!closing) {
         return out;
