@@ -191,31 +191,33 @@ Span<int64_t> sort_keys(Span<int64_t> keys, Span<int64_t> spare, int64_t count, 
     return src;
 }
 
-// Put the count pairs in (a, b) order: the first `tested` in the order the sweep found them,
-// the rest carried from the last list and already in order (find_world_pairs). The tested
-// ones are sorted by their keys a n + b and merged with the carried ones.
-void sort_pairs(const PairLists& lists, int64_t tested, int64_t count, int64_t num_bodies) {
+// Put the count pairs in (a, b) order: the first `carried` taken from the last list and
+// already in order, the rest in the order the sweep found them (find_world_pairs). The
+// tested ones are sorted by their keys a n + b and merged into the carried ones in place,
+// from the back: slot k is never below the carried pair read next, and once every tested
+// pair is placed the carried pairs left are where they belong. So a sleeping pile beside
+// one moving body moves only the carried pairs that sort after that body's.
+void sort_pairs(const PairLists& lists, int64_t carried, int64_t count, int64_t num_bodies) {
+    const int64_t tested = count - carried;
     for (int64_t k = 0; k < tested; ++k) {
-        lists.keys[k] = static_cast<int64_t>(lists.pair_a[k]) * num_bodies + lists.pair_b[k];
+        lists.keys[k] = static_cast<int64_t>(lists.pair_a[carried + k]) * num_bodies +
+                        lists.pair_b[carried + k];
     }
     const uint64_t bodies = static_cast<uint64_t>(num_bodies);
     const Span<int64_t> sorted = sort_keys(lists.keys, lists.spare, tested, bodies * bodies - 1);
-    const Span<int64_t> merged = sorted.data == lists.keys.data ? lists.spare : lists.keys;
-    int64_t t = 0, c = tested;
-    for (int64_t k = 0; k < count; ++k) {
-        const int64_t carried = c < count ? static_cast<int64_t>(lists.pair_a[c]) * num_bodies + lists.pair_b[c] : 0;
-        if (c == count || (t < tested && sorted[t] < carried)) {
-            merged[k] = sorted[t++];
-        } else {
-            merged[k] = carried;
-            c += 1;
-        }
-    }
     const KeyDecoder decode(num_bodies);
-    for (int64_t k = 0; k < count; ++k) {
-        const auto [a, b] = decode(merged[k]);
-        lists.pair_a[k] = a;
-        lists.pair_b[k] = b;
+    int64_t t = tested - 1, c = carried - 1;
+    for (int64_t k = count - 1; t >= 0; --k) {
+        if (c >= 0 &&
+            static_cast<int64_t>(lists.pair_a[c]) * num_bodies + lists.pair_b[c] > sorted[t]) {
+            lists.pair_a[k] = lists.pair_a[c];
+            lists.pair_b[k] = lists.pair_b[c];
+            c -= 1;
+        } else {
+            const auto [a, b] = decode(sorted[t--]);
+            lists.pair_a[k] = a;
+            lists.pair_b[k] = b;
+        }
     }
 }
 
@@ -264,9 +266,18 @@ int64_t find_world_pairs(const Geometry& geo, Span<const int32_t> motion,
                                            lists.reach[i]);
         }
     }
-    // known: both bodies kept (a pair of two bodies not kept, or of one, is tested)
+    // known: both bodies kept (a pair of two bodies not kept, or of one, is tested). The
+    // known pairs come first, in the last list's order, then the tested ones (sort_pairs)
     const auto known = [&](int i, int j) { return carrying && carried.kept[i] && carried.kept[j]; };
     int64_t count = 0;
+    const KeyDecoder decode(n);
+    for (int64_t k = 0; carrying && k < carried.keys.size; ++k) {
+        const auto [a, b] = decode(carried.keys[k]);
+        if (known(a, b)) {
+            count = add_pair(a, b, motion, lists, count);
+        }
+    }
+    const int64_t known_pairs = count;
     for (int p = 0; p < n; ++p) {
         if (unbounded[p] == 0) {
             continue;
@@ -324,16 +335,8 @@ int64_t find_world_pairs(const Geometry& geo, Span<const int32_t> motion,
             }
         }
     }
-    const int64_t tested = count;
-    const KeyDecoder decode(n);
-    for (int64_t k = 0; carrying && k < carried.keys.size; ++k) {
-        const auto [a, b] = decode(carried.keys[k]);
-        if (known(a, b)) {
-            count = add_pair(a, b, motion, lists, count);
-        }
-    }
     if (count <= lists.pair_a.size) {
-        sort_pairs(lists, tested, count, n);
+        sort_pairs(lists, known_pairs, count, n);
     }
     return count;
 }
