@@ -9,43 +9,53 @@ namespace rg {
 
 namespace {
 
-// Body i's state in SNAPSHOT order: position, orientation (w, x, y, z), velocity, angular
-// momentum, angular velocity, rotation (row-major).
-struct StateRow {
-    double values[SNAPSHOT];
-};
-
-StateRow state_row(const BodyStates& bodies, int i) {
-    const Vec3 p = bodies.position[i], v = bodies.velocity[i];
-    const Vec3 l = bodies.angular_momentum[i], omega = bodies.angular_velocity[i];
-    const Quat q = bodies.orientation[i];
-    const Mat3& r = bodies.rotation[i];
-    return {{p.x, p.y, p.z, q.w, q.x, q.y, q.z, v.x, v.y, v.z, l.x, l.y, l.z, omega.x, omega.y,
-             omega.z, r.m[0][0], r.m[0][1], r.m[0][2], r.m[1][0], r.m[1][1], r.m[1][2], r.m[2][0],
-             r.m[2][1], r.m[2][2]}};
+// Calls visit(field) for body i's state in SNAPSHOT order: position, orientation (w, x, y,
+// z), velocity, angular momentum, angular velocity, rotation (row-major). Each field is a
+// plain struct of doubles, taken as its bytes.
+template <class Visit>
+void visit_state(const BodyStates& bodies, int i, Visit&& visit) {
+    static_assert(sizeof(Vec3) == 3 * sizeof(double) && sizeof(Quat) == 4 * sizeof(double) &&
+                  sizeof(Mat3) == 9 * sizeof(double));
+    static_assert(3 + 4 + 3 + 3 + 3 + 9 == SNAPSHOT);
+    visit(bodies.position[i]);
+    visit(bodies.orientation[i]);
+    visit(bodies.velocity[i]);
+    visit(bodies.angular_momentum[i]);
+    visit(bodies.angular_velocity[i]);
+    visit(bodies.rotation[i]);
 }
 
 void read_state(const BodyStates& bodies, int i, Span<double> out) {
-    const StateRow now = state_row(bodies, i);
-    std::memcpy(out.data, now.values, sizeof now.values);
+    RG_CHECK(out.size == SNAPSHOT);
+    int64_t at = 0;
+    visit_state(bodies, i, [&](const auto& field) {
+        std::memcpy(out.data + at, &field, sizeof field);
+        at += sizeof field / sizeof(double);
+    });
 }
 
 // Is body i's state bit for bit its snapshot (the sign of a zero counts)? A NaN is never
 // unchanged. Every entry is compared (no early exit): a branch per entry costs more than the
-// compares, and the bits' differences OR-ed together are a few vector operations. The row is
-// built in registers and compared where it stands, not copied out first: this comparison is
-// what an asleep body costs a step.
+// compares, and the bits' differences OR-ed together, and the NaN test made on the bits
+// too, are a few vector operations. Each field is compared where it stands: this
+// comparison is what an asleep body costs a step.
 bool unchanged(const BodyStates& bodies, int i, Span<const double> snapshot) {
-    const StateRow now = state_row(bodies, i);
+    constexpr uint64_t MAGNITUDE = 0x7fffffffffffffffu, INFINITE = 0x7ff0000000000000u;
+    RG_CHECK(snapshot.size == SNAPSHOT);
     uint64_t differ = 0;
     bool nan = false;
-    for (int k = 0; k < SNAPSHOT; ++k) {
-        uint64_t a, b;
-        std::memcpy(&a, &now.values[k], sizeof a);
-        std::memcpy(&b, &snapshot[k], sizeof b);
-        differ |= a ^ b;
-        nan |= now.values[k] != now.values[k];
-    }
+    int64_t at = 0;
+    visit_state(bodies, i, [&](const auto& field) {
+        constexpr int64_t count = sizeof field / sizeof(double);
+        uint64_t now[count], was[count];
+        std::memcpy(now, &field, sizeof field);
+        std::memcpy(was, snapshot.data + at, sizeof field);
+        for (int64_t k = 0; k < count; ++k) {
+            differ |= now[k] ^ was[k];
+            nan |= (now[k] & MAGNITUDE) > INFINITE;
+        }
+        at += count;
+    });
     return differ == 0 && !nan;
 }
 
