@@ -256,7 +256,14 @@ void mark_asleep(WorldStep& w, int64_t count, double dt) {
             rest.resting[r] = 0;
         }
     }
-    for (int64_t k = 0; k < count; ++k) {
+    // an island touching a static or kinematic body that changed is disturbed; most steps
+    // none changed (each one kept is unchanged), and the pairs need no walk
+    bool partner_changed = false;
+    for (int i = 0; i < n; ++i) {
+        partner_changed = partner_changed || (motion[i] != DYNAMIC && !rest.kept[i] &&
+                                              !unchanged(s, i, snapshot_of(rest, i)));
+    }
+    for (int64_t k = 0; partner_changed && k < count; ++k) {
         const int b = w.lists.pair_b[k];
         const int64_t r = rest.island[w.lists.pair_a[k]];
         if (rest.slow[r] && motion[b] != DYNAMIC && !rest.kept[b] &&
