@@ -47,12 +47,13 @@ bool unchanged(const BodyStates& bodies, int i, Span<const double> snapshot) {
     int64_t at = 0;
     visit_state(bodies, i, [&](const auto& field) {
         constexpr int64_t count = sizeof field / sizeof(double);
-        uint64_t now[count], was[count];
-        std::memcpy(now, &field, sizeof field);
-        std::memcpy(was, snapshot.data + at, sizeof field);
+        const char* bytes = reinterpret_cast<const char*>(&field);
         for (int64_t k = 0; k < count; ++k) {
-            differ |= now[k] ^ was[k];
-            nan |= (now[k] & MAGNITUDE) > INFINITE;
+            uint64_t now, was;
+            std::memcpy(&now, bytes + k * sizeof(double), sizeof now);
+            std::memcpy(&was, snapshot.data + at + k, sizeof was);
+            differ |= now ^ was;
+            nan |= (now & MAGNITUDE) > INFINITE;
         }
         at += count;
     });
