@@ -23,8 +23,8 @@
 // formulation, kept to measure the difference).
 //
 // The pool of contact rows has a capacity per world that grows between steps to what the
-// world's own last step needed (world.h: not what other worlds of its batch needed). A step whose contacts do not all fit in its impulse stages
-// (pool_overflowed) is abandoned before its position update and run again whole once the
+// world's own last step needed (world.h: not what other worlds of its batch needed). A step
+// whose contacts do not all fit in its impulse stages (pool_overflowed) is abandoned before its position update and run again whole once the
 // pool has grown (step.cpp), as a step whose pairs overflow their buffers is. The overlap
 // correction after them needs no rerun: it asks at the detection's own margin with the final
 // velocities, so a pair it must find again at the current prediction gets the same narrow

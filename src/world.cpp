@@ -75,13 +75,17 @@ void ContactCacheBuffers::allocate_pairs(int num_worlds, int64_t num_pairs) {
 }
 
 void ContactCacheBuffers::allocate_rows(int num_worlds, int64_t num_rows) {
+    allocate_storage(num_worlds, num_rows);
+    limit.assign(num_worlds, num_rows);
+}
+
+void ContactCacheBuffers::allocate_storage(int num_worlds, int64_t num_rows) {
     rows = num_rows;
     for (Array<Vec3>* per_row : {&point, &normal, &arm_a, &arm_b}) {
         per_row->assign(num_worlds * num_rows, {0.0, 0.0, 0.0});
     }
     depth.assign(num_worlds * num_rows, 0.0);
     detected.assign(num_worlds, 0);
-    limit.assign(num_worlds, num_rows);
 }
 
 void ContactCacheBuffers::fit_rows(int num_worlds) {
@@ -93,9 +97,7 @@ void ContactCacheBuffers::fit_rows(int num_worlds) {
         }
     }
     if (largest > rows) {
-        const Array<int64_t> kept = limit;
-        allocate_rows(num_worlds, largest);
-        limit = kept;
+        allocate_storage(num_worlds, largest);
     }
 }
 

@@ -186,6 +186,8 @@ struct ContactCacheBuffers {
     // Each world whose last step needed more rows than its limit gets twice that need as its
     // limit; Q grows to the largest limit (the rows are found again in every step).
     void fit_rows(int num_worlds);
+    // Q = num_rows rows per world, the limits left as they are.
+    void allocate_storage(int num_worlds, int64_t num_rows);
     ContactCache view(int w);
 };
 
