@@ -206,12 +206,20 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
     const BodyModel& model = w.model;
     // approach speed of every contact, kept in set.depth (negative: approaching), and the
     // separation at the start of the step that it and the predicted depth imply
+    bool any_approaching = false;
     for (int64_t i = 0; i < count; ++i) {
         const Vec3 v = relative_velocity(w, set, a, static_cast<int>(set.partner[i]), i);
         const double vn = dot(v, set.normal[i]);
         set.gap[i] = -(set.depth[i] + dt * vn);
         set.depth[i] = vn;
         set.group[i] = -1;
+        any_approaching = any_approaching || vn < -REST_SPEED;
+    }
+    // No contact approaching: every patch below would end at rest or unresolved with nothing
+    // to apply (a patch's targets lie at or above v_n for e in [-1, 0], resolve_patch), so
+    // the grouping is skipped. A settled stack spends 10-20% of its resolves here.
+    if (!any_approaching) {
+        return 0;
     }
     int applied = 0;
     for (int64_t seed = 0; seed < count; ++seed) {
