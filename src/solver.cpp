@@ -217,7 +217,7 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
     }
     // No contact approaching: every patch below would end at rest or unresolved with nothing
     // to apply (a patch's targets lie at or above v_n for e in [-1, 0], resolve_patch), so
-    // the grouping is skipped. A settled stack spends 10-20% of its resolves here.
+    // the grouping is skipped: 11-20% of the resolves in the piles of 10 to 1000.
     if (!any_approaching) {
         return 0;
     }
