@@ -241,8 +241,11 @@ void advance(StepContext& context, int64_t steps, double dt) {
     const int num_worlds = context.num_worlds();
     std::vector<int64_t> done(num_worlds, 0);
     ThreadPool& pool = ThreadPool::instance();
+    const bool choice = num_worlds > 1 && pool.size() > 1;  // sharing.h
+    const bool shared = choice && context.sharing.share();
+    const double start = choice ? clock_seconds() : 0.0;
     while (true) {
-        const int ranges = std::min(num_worlds, pool.size());
+        const int ranges = shared ? std::min(num_worlds, pool.size()) : 1;
         pool.run(ranges, [&](int range) {
             const int first = static_cast<int>(static_cast<int64_t>(num_worlds) * range / ranges);
             const int last = static_cast<int>(static_cast<int64_t>(num_worlds) * (range + 1) / ranges);
@@ -255,6 +258,9 @@ void advance(StepContext& context, int64_t steps, double dt) {
         });
         context.fit_contact_rows();  // the contact pool may grow for the next steps
         if (std::all_of(done.begin(), done.end(), [&](int64_t d) { return d == steps; })) {
+            if (choice) {
+                context.sharing.record(shared, clock_seconds() - start, num_worlds * steps);
+            }
             return;
         }
         int64_t needed = 0;

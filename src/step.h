@@ -13,9 +13,10 @@ namespace rg {
 // the first step and are cleared by its position update.
 int64_t step_world(WorldStep& w, int64_t steps, double dt);
 
-// Advance every world of the context by `steps` steps (step_world), sharing ranges of worlds
-// out over the thread pool, growing the pair buffers and running again where they were too
-// small. A world's arithmetic is the same whichever range it is in, so results are
+// Advance every world of the context by `steps` steps (step_world), on the calling thread or
+// sharing ranges of worlds out over the thread pool, whichever has been faster for this batch
+// (sharing.h), growing the pair buffers and running again where they were too small. A
+// world's arithmetic is the same whichever range and thread it is in, so results are
 // bit-identical however the worlds are grouped.
 void advance(StepContext& context, int64_t steps, double dt);
 

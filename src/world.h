@@ -16,6 +16,7 @@
 #include "broad_phase.h"
 #include "contact_set.h"
 #include "geometry.h"
+#include "sharing.h"
 #include "timers.h"
 
 namespace rg {
@@ -250,6 +251,7 @@ public:
     Array<double> stage_seconds;    // (B, STAGE_COUNT) s
     Array<int64_t> stage_calls;     // (B, STAGE_COUNT)
     bool timed = false;             // read the clock in every stage (timers.h)
+    BatchSharing sharing;           // step on the calling thread or the pool (sharing.h)
 
 private:
     void allocate_pairs(int64_t capacity);

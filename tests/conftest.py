@@ -2,6 +2,7 @@
 
 import pytest
 
+from rigid_gym import _core
 from rigid_gym.cli import main
 
 
@@ -17,3 +18,24 @@ def usage_error(capsys):
         return capsys.readouterr().err
 
     return run
+
+
+
+@pytest.fixture
+def step_both_ways():
+    """``step_both_ways(world, steps)``: ``world.step(1)`` ``steps`` (>= 2) times with the
+    core's pool at two threads (the calling thread and one worker) whatever the machine has.
+    A batch's first call runs on the calling thread and its second is shared out over the
+    pool (src/sharing.h), so both ways step it: checked. The pool is back at its default size
+    afterwards."""
+
+    def run(world, steps: int) -> None:
+        ways = set()
+        for _ in range(steps):
+            world.step(1)
+            ways.add(world.core.shared)
+        assert ways >= {False, True}
+
+    _core.set_num_threads(2)
+    yield run
+    _core.set_num_threads(0)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import rigid_gym as rg
+from rigid_gym import _core
 from rigid_gym.meshes import l_shape_mesh
 from rigid_gym.report.scenes import cube_stack, pile
 
@@ -29,16 +30,17 @@ def random_initial_velocities(world, rng, worlds):
             world.set_velocity(i, rng.normal(size=3), rng.normal(size=3) * 5, world=w)
 
 
-def test_batched_world_equals_separate_worlds_bit_for_bit():
-    """1000 worlds stepped in one call give, per world, exactly what 1000 separate single
-    worlds give (the core's threads take ranges of worlds: independent work, only reordered).
-    20 steps of free flight with a kinematic body; test_solver checks batching with contacts."""
+def test_batched_world_equals_separate_worlds_bit_for_bit(step_both_ways):
+    """1000 worlds stepped together give, per world, exactly what 1000 separate single worlds
+    give, whether a step runs on the calling thread or the core's threads take ranges of
+    worlds (independent work, only reordered). 20 steps of free flight with a kinematic body;
+    test_solver checks batching with contacts."""
     num_worlds, steps = 1000, 20
     scene = mixed_scene()  # one scene: its mesh's distance grid is computed once
     batched = rg.World(scene, dt=1 / 240, num_worlds=num_worlds,
                        config=rg.SolverConfig(rotation_order=3))
     random_initial_velocities(batched, np.random.default_rng(1), range(num_worlds))
-    batched.step(steps)
+    step_both_ways(batched, steps)
     rng = np.random.default_rng(1)
     for w in range(num_worlds):
         single = rg.World(scene, dt=1 / 240, config=rg.SolverConfig(rotation_order=3))
@@ -313,3 +315,39 @@ def test_the_model_is_read_only_and_changes_through_set_material():
             array[...] = array
     world.set_material(1, mass=2.0, friction=0.25)
     assert world.model.inverse_mass[0, 1] == 0.5 and world.model.friction[0, 1] == 0.25
+
+
+def test_a_batch_steps_the_way_its_paired_timings_find_cheaper():
+    """src/sharing.h, fed timings by hand: the first two calls run one way each; then the
+    cheaper way, with a probe of the other now and then; when the costs turn round, the
+    choice follows within a few probes."""
+    sharing = _core.BatchSharing()
+
+    def run(calls, seconds_alone, seconds_shared):
+        ways = []
+        for _ in range(calls):
+            shared = sharing.share()
+            ways.append(shared)
+            sharing.record(shared, seconds_shared if shared else seconds_alone, 16)
+        return np.array(ways)
+
+    first = run(300, 2e-3, 1e-3)  # shared twice as fast
+    assert list(first[:2]) == [False, True]
+    assert first[2:].sum() >= 290 and not first[2:].all()  # probes alone continue
+    turned = run(600, 1e-3, 3e-3)  # now alone three times as fast
+    assert turned[0]  # the choice holds until a probe shows otherwise
+    assert turned[-200:].sum() <= 3  # then alone, but for the probes shared
+
+
+def test_one_world_or_one_thread_is_never_shared():
+    single = rg.World(mixed_scene())
+    single.step(3)
+    assert single.core.shared is None
+    _core.set_num_threads(1)
+    try:
+        batched = rg.World(mixed_scene(), num_worlds=4)
+        for _ in range(3):
+            batched.step(1)
+        assert batched.core.shared is None
+    finally:
+        _core.set_num_threads(0)

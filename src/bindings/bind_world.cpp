@@ -1,5 +1,6 @@
 // Python face of the step context: rigid_gym._core.StepContext (used by rigid_gym/world.py).
 #include <nanobind/stl/array.h>
+#include <nanobind/stl/optional.h>
 #include <nanobind/stl/tuple.h>
 
 #include <string>
@@ -215,6 +216,17 @@ void bind_world(nb::module_& m) {
         },
         nb::rv_policy::reference,
         "(B,) pairs the last step listed in each world; a copy.");
+    cls.def_prop_ro(
+        "shared",
+        [](StepContext& c) -> std::optional<bool> {
+            if (c.sharing.last() == 0) {
+                return std::nullopt;
+            }
+            return c.sharing.last() == 2;
+        },
+        "Whether the last step was shared out over the thread pool (True) or ran on the "
+        "calling thread (False), as the batch's measured costs chose (src/sharing.h); None "
+        "before a batch of several worlds has stepped with more than one thread.");
     cls.def_rw("timed", &StepContext::timed,
                "Read the clock in every stage of every step, for stage_seconds (src/timers.h).");
     cls.def_prop_ro(
@@ -276,6 +288,15 @@ void bind_world(nb::module_& m) {
         },
         "Contacts at the current poses of worlds [first, last) (src/queries.h): world, body_a, "
         "body_b (k,), point, normal (k, 3), depth (k,).");
+    nb::class_<BatchSharing>(m, "BatchSharing",
+                             "The choice between stepping a batch on the calling thread and "
+                             "sharing it out over the pool, as each StepContext makes it from "
+                             "its own timings (src/sharing.h); here to be fed timings by hand.")
+        .def(nb::init<>())
+        .def("share", &BatchSharing::share, "Share the next call out over the pool?")
+        .def("record", &BatchSharing::record, nb::arg("shared"), nb::arg("seconds"),
+             nb::arg("world_steps"),
+             "The call ran shared or not and took `seconds` for `world_steps` world-steps.");
     m.def("num_threads", [] { return ThreadPool::instance().size(); },
           "Threads a batch of worlds is shared out over, the calling thread included.");
     m.def("set_num_threads", [](int threads) { ThreadPool::set_size(threads); },
