@@ -5,7 +5,12 @@
 
 namespace rg {
 
-bool BatchSharing::share() const { return calls_ == next_probe_ ? !chosen_ : chosen_; }
+bool BatchSharing::share() const {
+    if (forced_ >= 0) {
+        return forced_ == 1;
+    }
+    return calls_ == next_probe_ ? !chosen_ : chosen_;
+}
 
 void BatchSharing::record(bool shared, double seconds, int64_t world_steps) {
     const double cost = world_steps > 0 ? seconds / static_cast<double>(world_steps) : 0.0;

@@ -35,6 +35,10 @@ public:
     // The way the last call ran: 0 none recorded, 1 on the calling thread, 2 shared.
     int last() const { return calls_ == 0 ? 0 : last_shared_ ? 2 : 1; }
 
+    // Every call from now on alone (0) or shared (1), or chosen by the timings (-1): to step
+    // one way on purpose (tests, comparisons of the two ways).
+    void force(int way) { forced_ = way; }
+
 private:
     static constexpr int64_t FIRST_PROBE = 32, LAST_PROBE = 1024;  // calls between probes
     static constexpr int SAMPLES = 5;  // paired comparisons the choice rests on
@@ -45,6 +49,7 @@ private:
     int64_t next_probe_ = 1;      // the call that runs the way not chosen
     int64_t interval_ = FIRST_PROBE;
     bool chosen_ = false;         // share the calls that are not probes
+    int forced_ = -1;             // force()
     bool last_shared_ = false;
     double last_cost_ = 0.0;      // s per world-step of the last call
 };

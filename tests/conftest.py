@@ -21,13 +21,21 @@ def usage_error(capsys):
 
 
 
+
 @pytest.fixture
-def step_both_ways():
-    """``step_both_ways(world, steps)``: ``world.step(1)`` ``steps`` (>= 2) times with the
-    core's pool at two threads (the calling thread and one worker) whatever the machine has.
-    A batch's first call runs on the calling thread and its second is shared out over the
-    pool (src/sharing.h), so both ways step it: checked. The pool is back at its default size
-    afterwards."""
+def two_threads():
+    """The core's pool at two threads (the calling thread and one worker) whatever the
+    machine has, so that a batch can be shared out; at its default size afterwards."""
+    _core.set_num_threads(2)
+    yield
+    _core.set_num_threads(0)
+
+
+@pytest.fixture
+def step_both_ways(two_threads):
+    """``step_both_ways(world, steps)``: ``world.step(1)`` ``steps`` (>= 2) times, with the
+    pool at two threads. A batch's first call runs on the calling thread and its second is
+    shared out over the pool (src/sharing.h), so both ways step it: checked."""
 
     def run(world, steps: int) -> None:
         ways = set()
@@ -36,6 +44,4 @@ def step_both_ways():
             ways.add(world.core.shared)
         assert ways >= {False, True}
 
-    _core.set_num_threads(2)
-    yield run
-    _core.set_num_threads(0)
+    return run

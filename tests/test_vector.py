@@ -156,8 +156,10 @@ def test_a_forked_child_steps_a_vector_env_its_parent_stepped(when):
     """The parent's steps started the solver's thread pool; a forked child has none of its
     threads, and must start a pool of its own rather than wait for ever on the parent's.
     "during a step": forks while another thread is inside a batched step, holding the pool's
-    locks (without the child forgetting the pool, about a third of such children hang)."""
+    locks (without the child forgetting the pool, about a third of such children hang). Every
+    step is shared out, as a batch that found sharing faster would step."""
     envs = gym.make_vec("rigid_gym/Push-v0", num_envs=4)
+    envs.unwrapped.world.core.force_sharing(True)
     envs.reset(seed=0)
     for _ in range(5):
         envs.step(envs.action_space.sample())

@@ -339,6 +339,16 @@ def test_a_batch_steps_the_way_its_paired_timings_find_cheaper():
     assert turned[-200:].sum() <= 3  # then alone, but for the probes shared
 
 
+@pytest.mark.usefixtures("two_threads")
+def test_a_batch_can_be_made_to_step_one_way():
+    batched = rg.World(mixed_scene(), num_worlds=4)
+    for forced in (True, False, True):
+        batched.core.force_sharing(forced)
+        for _ in range(3):
+            batched.step(1)
+            assert batched.core.shared is forced
+
+
 def test_one_world_or_one_thread_is_never_shared():
     single = rg.World(mixed_scene())
     single.step(3)

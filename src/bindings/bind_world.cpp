@@ -227,6 +227,15 @@ void bind_world(nb::module_& m) {
         "Whether the last step was shared out over the thread pool (True) or ran on the "
         "calling thread (False), as the batch's measured costs chose (src/sharing.h); None "
         "before a batch of several worlds has stepped with more than one thread.");
+    cls.def(
+        "force_sharing",
+        [](StepContext& c, std::optional<bool> shared) {
+            c.sharing.force(shared.has_value() ? static_cast<int>(*shared) : -1);
+        },
+        nb::arg("shared").none(),
+        "Step every call from now on shared out over the pool (True) or on the calling thread "
+        "(False), or as the batch's timings choose (None, the default): src/sharing.h. One "
+        "world or a pool of one thread always steps on the calling thread.");
     cls.def_rw("timed", &StepContext::timed,
                "Read the clock in every stage of every step, for stage_seconds (src/timers.h).");
     cls.def_prop_ro(
