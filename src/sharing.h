@@ -4,16 +4,17 @@
 // Sharing pays only when a batch's work outweighs what it costs to wake the pool's workers
 // and split the work, and that differs between machines by an order of magnitude. Where
 // cores are independent and a worker wakes within microseconds, far smaller batches should
-// gain from a second thread (not measured on the project's machines). On a VM whose two vCPUs together run about 1.2-1.6x one of them (two processes at once each ran
-// at 0.6-0.8x their speed alone) and whose sleeping worker takes 57-245 us to wake, the Push
-// env's 16-copy step (~100 us of solver work) ran at 0.63x shared, 1024 copies at 1.26x. No
-// fixed batch size serves both, so each batch measures. A call's cost moves with what its
+// gain from a second thread (not measured on the project's machines). On a VM whose two
+// vCPUs together run about 1.2-1.6x one of them (two processes at once each ran at 0.6-0.8x
+// their speed alone) and whose sleeping worker takes 57-245 us to wake, the Push env's
+// 16-copy step (~100 us of solver work) ran at 0.63x shared, 1024 copies at 1.26x. No fixed
+// batch size serves both, so each batch measures. A call's cost moves with what its
 // worlds do (copies asleep, contacts, resets), so the two ways are compared in pairs of
 // consecutive calls, one each way: the first two calls, then a probe now and then (one call
 // the way not chosen, paired with the call before it and the one after). The choice is the
 // way the median of the last SAMPLES pairs found cheaper. Probes come FIRST_PROBE calls apart
-// at first and after a pair that goes against the choice, twice as far apart after each
-// other probe, up to LAST_PROBE: once settled they cost well under 1% (a probe the slower
+// at first and after a pair that goes against the choice, and otherwise twice as far apart
+// after each probe, up to LAST_PROBE: once settled they cost well under 1% (a probe the slower
 // way at 1024 copies: 6.8 ms against 3.4). The clock is read twice per call (tens of
 // nanoseconds against a call's microseconds). Which thread steps a world never changes a bit
 // of it (step.h), so the choice changes speed only.

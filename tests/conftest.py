@@ -20,8 +20,6 @@ def usage_error(capsys):
     return run
 
 
-
-
 @pytest.fixture
 def two_threads():
     """The core's pool at two threads (the calling thread and one worker) whatever the
