@@ -4,8 +4,9 @@
 
 The copies are the task's own (the same gripper, observations, rewards and seeding as
 ``gym.make``'s env, which is the same core with B = 1), in one ``World(num_worlds=B)``: the
-solver steps all of them in one call, in parallel over worlds. Copy i of ``reset(seed=s)``
-plays exactly what a single env reset with seed s + i plays (``tests/test_vector.py``).
+solver steps all of them in one call, in parallel over worlds where the batch measures that
+faster than one thread (``src/sharing.h``). Copy i of ``reset(seed=s)`` plays exactly what a
+single env reset with seed s + i plays (``tests/test_vector.py``).
 
 Autoreset is ``SAME_STEP``: an episode that ends is reset within the same ``step``, whose
 observation is then the new episode's first; the last one is in ``infos["final_obs"]`` and its
