@@ -8,16 +8,17 @@
 // vCPUs together run about 1.2-1.6x one of them (two processes at once each ran at 0.6-0.8x
 // their speed alone) and whose sleeping worker takes 57-245 us to wake, the Push env's
 // 16-copy step (~100 us of solver work) ran at 0.63x shared, 1024 copies at 1.26x. No fixed
-// batch size serves both, so each batch measures. A call's cost moves with what its
-// worlds do (copies asleep, contacts, resets), so the two ways are compared in pairs of
-// consecutive calls, one each way: the first two calls, then a probe now and then (one call
-// the way not chosen, paired with the call before it and the one after). The choice is the
-// way the median of the last SAMPLES pairs found cheaper. Probes come FIRST_PROBE calls apart
-// at first and after a pair that goes against the choice, and otherwise twice as far apart
-// after each probe, up to LAST_PROBE: once settled they cost well under 1% (a probe the slower
-// way at 1024 copies: 6.8 ms against 3.4). The clock is read twice per call (tens of
-// nanoseconds against a call's microseconds). Which thread steps a world never changes a bit
-// of it (step.h), so the choice changes speed only.
+// batch size serves both, so each batch measures. A call's cost moves with what its worlds
+// do (copies asleep, contacts, resets), so the two ways are compared in pairs of consecutive
+// calls, one each way: the first two calls, shared first (a batch stepped in one long call is
+// shared, the way that pays for the large batches such calls are made for), then a probe now
+// and then (one call the way not chosen, paired with the call before it and the one after).
+// The choice is the way the median of the last SAMPLES pairs found cheaper. Probes come
+// FIRST_PROBE calls apart at first and after a pair that goes against the choice, and
+// otherwise twice as far apart after each probe, up to LAST_PROBE: once settled they cost
+// well under 1% (a probe the slower way at 1024 copies: 6.8 ms against 3.4). The clock is read
+// twice per call (tens of nanoseconds against a call's microseconds). Which thread steps a
+// world never changes a bit of it (step.h), so the choice changes speed only.
 #pragma once
 
 #include <cstdint>
@@ -49,7 +50,7 @@ private:
     int64_t calls_ = 0;
     int64_t next_probe_ = 1;      // the call that runs the way not chosen
     int64_t interval_ = FIRST_PROBE;
-    bool chosen_ = false;         // share the calls that are not probes
+    bool chosen_ = true;          // share the calls that are not probes
     int forced_ = -1;             // force()
     bool last_shared_ = false;
     double last_cost_ = 0.0;      // s per world-step of the last call

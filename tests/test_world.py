@@ -332,7 +332,7 @@ def test_a_batch_steps_the_way_its_paired_timings_find_cheaper():
         return np.array(ways)
 
     first = run(300, 2e-3, 1e-3)  # shared twice as fast
-    assert list(first[:2]) == [False, True]
+    assert list(first[:2]) == [True, False]
     assert first[2:].sum() >= 290 and not first[2:].all()  # probes alone continue
     turned = run(600, 1e-3, 3e-3)  # now alone three times as fast
     assert turned[0]  # the choice holds until a probe shows otherwise
