@@ -12,6 +12,17 @@ bool BatchSharing::share() const {
     return calls_ == next_probe_ ? !chosen_ : chosen_;
 }
 
+void BatchSharing::force(int way) {
+    forced_ = way;
+    if (way < 0) {  // what was measured before the forced calls may no longer hold
+        samples_ = 0;
+        chosen_ = true;
+        interval_ = FIRST_PROBE;
+        next_probe_ = calls_ + 1;
+        last_cost_ = 0.0;  // no pair with the last forced call
+    }
+}
+
 void BatchSharing::record(bool shared, double seconds, int64_t world_steps) {
     const double cost = world_steps > 0 ? seconds / static_cast<double>(world_steps) : 0.0;
     if (calls_ == next_probe_) {  // a probe: the next one further off

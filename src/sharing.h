@@ -38,8 +38,9 @@ public:
     int last() const { return calls_ == 0 ? 0 : last_shared_ ? 2 : 1; }
 
     // Every call from now on alone (0) or shared (1), or chosen by the timings (-1): to step
-    // one way on purpose (tests, comparisons of the two ways).
-    void force(int way) { forced_ = way; }
+    // one way on purpose (tests, comparisons of the two ways). Back to the timings, the choice
+    // starts afresh: the next two calls are a new first pair.
+    void force(int way);
 
 private:
     static constexpr int64_t FIRST_PROBE = 32, LAST_PROBE = 1024;  // calls between probes

@@ -342,11 +342,17 @@ def test_a_batch_steps_the_way_its_paired_timings_find_cheaper():
 @pytest.mark.usefixtures("two_threads")
 def test_a_batch_can_be_made_to_step_one_way():
     batched = rg.World(mixed_scene(), num_worlds=4)
-    for forced in (True, False, True):
+    for forced in (True, False, True, False):
         batched.core.force_sharing(forced)
         for _ in range(3):
             batched.step(1)
             assert batched.core.shared is forced
+    batched.core.force_sharing(None)  # the timings choose again, from a new first pair
+    ways = []
+    for _ in range(2):
+        batched.step(1)
+        ways.append(batched.core.shared)
+    assert ways == [True, False]
 
 
 def test_one_world_or_one_thread_is_never_shared():

@@ -234,8 +234,9 @@ void bind_world(nb::module_& m) {
         },
         nb::arg("shared").none(),
         "Step every call from now on shared out over the pool (True) or on the calling thread "
-        "(False), or as the batch's timings choose (None, the default): src/sharing.h. One "
-        "world or a pool of one thread always steps on the calling thread.");
+        "(False), or as the batch's timings choose (None, the default; the choice starts "
+        "afresh, shared then alone): src/sharing.h. One world or a pool of one thread always "
+        "steps on the calling thread.");
     cls.def_rw("timed", &StepContext::timed,
                "Read the clock in every stage of every step, for stage_seconds (src/timers.h).");
     cls.def_prop_ro(
