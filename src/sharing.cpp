@@ -12,14 +12,18 @@ bool BatchSharing::share() const {
     return calls_ == next_probe_ ? !chosen_ : chosen_;
 }
 
+void BatchSharing::restart() {
+    samples_ = 0;
+    chosen_ = true;
+    next_probe_ = calls_ + 1;
+    interval_ = FIRST_PROBE;
+    last_cost_ = 0.0;
+}
+
 void BatchSharing::force(int way) {
     forced_ = way;
     if (way < 0) {  // what was measured before the forced calls may no longer hold
-        samples_ = 0;
-        chosen_ = true;
-        interval_ = FIRST_PROBE;
-        next_probe_ = calls_ + 1;
-        last_cost_ = 0.0;  // no pair with the last forced call
+        restart();
     }
 }
 

@@ -27,6 +27,8 @@ namespace rg {
 
 class BatchSharing {
 public:
+    BatchSharing() { restart(); }
+
     // Share the next call out over the pool? (Asked only when the pool has several threads
     // and the batch several worlds.)
     bool share() const;
@@ -46,15 +48,18 @@ private:
     static constexpr int64_t FIRST_PROBE = 32, LAST_PROBE = 1024;  // calls between probes
     static constexpr int SAMPLES = 5;  // paired comparisons the choice rests on
 
+    // Nothing measured: the next call shared, the one after it alone (the first pair).
+    void restart();
+
     double ratio_[SAMPLES] = {};  // shared / alone cost of consecutive calls, newest first
-    int samples_ = 0;             // how many of ratio_ hold one (at most SAMPLES)
+    int samples_;                 // how many of ratio_ hold one (at most SAMPLES)
     int64_t calls_ = 0;
-    int64_t next_probe_ = 1;      // the call that runs the way not chosen
-    int64_t interval_ = FIRST_PROBE;
-    bool chosen_ = true;          // share the calls that are not probes
+    int64_t next_probe_;          // the call that runs the way not chosen
+    int64_t interval_;            // calls to the probe after the next
+    bool chosen_;                 // share the calls that are not probes
     int forced_ = -1;             // force()
     bool last_shared_ = false;
-    double last_cost_ = 0.0;      // s per world-step of the last call
+    double last_cost_;            // s per world-step of the last call; 0: no pair with it
 };
 
 }  // namespace rg
