@@ -12,10 +12,18 @@ cost of a phase, not a usable setting: a stack without shock propagation is not 
     python benchmarks/solver.py            # the full table (about 10 minutes on 2 cores)
     python benchmarks/solver.py --quick    # 10-stack and small piles only
     python benchmarks/solver.py --timers   # what timing the stages costs (World(profile=True))
+    python benchmarks/solver.py --passes   # the falling piles with fewer contact passes
 
 ``--timers`` steps one world of each of a free ball (the cheapest step there is), the 10-cube
 stack and a pile of 100 with its stage timers off and on in alternate rounds, and prints the
 median steps/s of each and the difference per step.
+
+``--passes`` times the piles of 10 and 100 over the first second after their drop (reset
+before each timing, as ``benchmarks/speed.py`` times its falling scenes) at the default 10
+contact passes and at fewer, every count in turn in each round, and prints each count's
+steps/s and its median speed-up over the default. Fewer passes change every trajectory in
+contact; the report (``rigid-gym report``) tells what they do to its errors. No pass at all
+is the floor that the rest of the step (detection, shock propagation, the updates) sets.
 """
 
 import argparse
@@ -62,14 +70,51 @@ def timer_cost(rounds: int = 21) -> None:
               f"{(1.0 / on - 1.0 / off) * 1e9:,.0f} ns |")
 
 
+PASS_COUNTS = (10, 5, 3, 2, 1, 0)
+"""Contact passes timed by ``--passes``; the first is the default (SolverConfig). 0 (no
+contact stage: what the rest of the step costs) is a floor, not a usable setting."""
+
+
+def pass_speed(rounds: int = 7) -> None:
+    """Steps/s of the falling piles at each of PASS_COUNTS contact passes, in alternate rounds."""
+    print("| scene | " + " | ".join(f"{n} pass{'es' if n != 1 else ''}" for n in PASS_COUNTS)
+          + " |")
+    print("|---|" + "---:|" * len(PASS_COUNTS))
+    scenes = (("pile of 10, falling", pile(10), 10), ("pile of 100, falling", pile(100), 1))
+    for name, scene, runs in scenes:  # runs: drops timed per round
+        worlds = {n: rg.World(scene, dt=DT,
+                              config=rg.SolverConfig.for_scene(scene, contact_passes=n))
+                  for n in PASS_COUNTS}
+        rates: dict[int, list[float]] = {n: [] for n in PASS_COUNTS}
+        for _ in range(rounds):
+            for n, world in worlds.items():
+                elapsed = 0.0
+                for _ in range(runs):
+                    world.reset()
+                    start = time.perf_counter()
+                    world.step(240)
+                    elapsed += time.perf_counter() - start
+                rates[n].append(240 * runs / elapsed)
+        default = rates[PASS_COUNTS[0]]
+        cells = [f"{statistics.median(rates[n]):,.0f} "
+                 f"({statistics.median(r / d for r, d in zip(rates[n], default)):.2f}x)"
+                 for n in PASS_COUNTS]
+        print(f"| {name} | " + " | ".join(cells) + " |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="10-stack and small piles only")
     parser.add_argument("--timers", action="store_true",
                         help="what timing the stages costs (World(profile=True))")
+    parser.add_argument("--passes", action="store_true",
+                        help="the falling piles with fewer contact passes")
     args = parser.parse_args()
     if args.timers:
         timer_cost()
+        return
+    if args.passes:
+        pass_speed()
         return
     scenes = [("10-cube stack", cube_stack(10), 240, 240), ("pile of 10", pile(10), 240, 240)]
     if not args.quick:
