@@ -293,12 +293,14 @@ def stiff_section(results: Results) -> list[str]:
 
 def phase_section(results: Results) -> list[str]:
     lines = ["## 4. Solver phases used", "",
-             ("`SolverConfig.for_scene` leaves out what a scene cannot need (no collision phase "
-              "when every restitution is 0, no shock propagation without gravity or supports). "
-              "Below: what each closed-form case left out at dt = 1/240 and the cost against "
-              "every phase on (`SolverConfig()`), with the first error of each (equal when "
-              "leaving the phase out cannot change the answer); differences of a few percent "
-              "are timing noise."), "",
+             ("`SolverConfig.for_scene` leaves out what a scene cannot need (no shock "
+              "propagation without gravity or supports) and the collision phase when every "
+              "restitution is 0 (impacts are then the contact phase's alone, which ends at "
+              "e = 0 too). Below: what each closed-form case left out at dt = 1/240 and the "
+              "cost against every phase on (`SolverConfig()`), with the first error of each "
+              "(equal where leaving the phase out cannot change the answer; where it differs, "
+              "the phase left out changed how an impact spread); differences of a few percent "
+              "in cost are timing noise."), "",
              "| case | left out | cost (s/s) | all phases on (s/s) | saved | error | error, all on |",
              "|---|---|---:|---:|---:|---:|---:|"]
     for case in CASES:

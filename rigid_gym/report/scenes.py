@@ -66,6 +66,19 @@ def sliding_sphere(speed: float, friction: float = 0.3, radius: float = 0.05) ->
     return scene
 
 
+def struck_row(count: int, speed: float) -> rg.Scene:
+    """``count`` 1 kg standard cubes side by side along +x on a frictionless ground, each
+    touching the next (bodies 1..count); the first moves into the others at ``speed`` (m/s).
+    Every restitution is 0."""
+    scene = rg.Scene()
+    scene.add_ground(friction=0.0)
+    for k in range(count):
+        scene.add_body(rg.Box((CUBE_HALF,) * 3), mass=1.0, friction=0.0,
+                       position=(2 * CUBE_HALF * k, 0, CUBE_HALF),
+                       velocity=(speed if k == 0 else 0.0, 0, 0))
+    return scene
+
+
 def spinning_body(moments, omega) -> rg.Scene:
     """A torque-free body (no gravity) with principal ``moments`` (3,) kg m^2 spinning at
     ``omega`` (3,) rad/s, body axes = world axes at t = 0."""
