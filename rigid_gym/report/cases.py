@@ -299,10 +299,10 @@ CASES = (
          "the contact passes carry the strike down the row within a step (Gauss-Seidel: each "
          "pass passes part of it on); what a step leaves, the next steps carry on, so the "
          "error falls with dt and, at a dt, with the number of passes. At dt = 1/240 the "
-         "default's error is another one: the cubes pitch by ~5e-7 rad/s (an impulse between "
-         "two moving bodies acts at its points' approach-weighted centre, which a tilt "
-         "shifts), spreading their speeds by a few um/s; with the narrow phase every pass, or "
-         "the collision phase on (section 4), they stay level and the speeds agree to 1e-8."),
+         "default's error is another one: with contacts found once per step the cubes turn "
+         "slightly while the strike passes (up to 4e-5 rad/s) and their speeds keep a spread "
+         "of a few um/s; with the narrow phase every pass, or the collision phase on "
+         "(section 4), they agree to 1e-8."),
     Case("torque_free", "torque-free body, I = (1, 2, 3) kg m^2, omega0 = (0.3, 0, 1) rad/s, 10 s",
          "Jacobi elliptic functions (Landau-Lifshitz §37)",
          ("body angular velocity, max relative error", "energy, max relative error",
