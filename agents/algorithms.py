@@ -59,13 +59,13 @@ def algorithm_class(name: str, learner: str = "sb3"):
     SAC and TQC and ``bc_sac.BCSACJax`` (ppo is SB3's, see ``learner_for``)."""
     if learner == "sbx" and name != "ppo":
         if name == "bc_sac":
-            from rigid_gym.agents.bc_sac import BCSACJax
+            from .bc_sac import BCSACJax
             return BCSACJax
         if name in ("sac", "tqc"):
             import sbx
             return {"sac": sbx.SAC, "tqc": sbx.TQC}[name]
     if name == "bc_sac":
-        from rigid_gym.agents.bc_sac import BCSAC
+        from .bc_sac import BCSAC
         return BCSAC
     if name == "sac":
         from stable_baselines3 import SAC

@@ -5,7 +5,7 @@
     rigid-gym dataset --verify rigid_gym/push/expert-v0
     rigid-gym dataset --recipes                       # the shipped datasets, RECIPES
 
-    from rigid_gym.agents.datasets import write_dataset, verify
+    from .datasets import write_dataset, verify
     dataset = write_dataset("rigid_gym/push/expert-v0", "rigid_gym/Push-v0", "scripted", 100)
     assert all(result.ok for result in verify(dataset))
 
@@ -240,7 +240,7 @@ def write_streams(dataset_id: str, env_id: str, policy: str, seeds: list[int], e
 
 
 def _bar(total: int, description: str, shown: bool):
-    from rigid_gym.agents.progress import bar
+    from .progress import bar
 
     return bar(total, description, shown)
 

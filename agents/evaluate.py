@@ -1,6 +1,6 @@
 """Evaluate a trained baseline: success rate and returns over seeded episodes.
 
-    from rigid_gym.agents.evaluate import evaluate
+    from .evaluate import evaluate
     evaluate("runs/Push-sac-seed0/model.zip", episodes=100)
 
     rigid-gym evaluate runs/Push-sac-seed0/model.zip --episodes 100
@@ -20,10 +20,11 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-from rigid_gym.agents.algorithms import algorithm_of, find_algorithm
-from rigid_gym.agents.progress import bar
 
 import rigid_gym  # noqa: F401  (registers the env ids)
+
+from .algorithms import algorithm_of, find_algorithm
+from .progress import bar
 
 EVAL_SEED = 1_000_000
 """Evaluation episodes use seeds EVAL_SEED, EVAL_SEED + 1, ...; training uses small seeds."""

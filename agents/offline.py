@@ -15,9 +15,10 @@ import argparse
 
 import numpy as np
 import torch as th
-from rigid_gym.agents.datasets import load
-from rigid_gym.agents.evaluate import success_rate
 from torch import nn
+
+from .datasets import load
+from .evaluate import success_rate
 
 INPUTS = ("observation", "desired_goal")
 """The observation entries the policy reads (achieved_goal is inside ``observation``)."""

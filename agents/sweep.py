@@ -34,8 +34,9 @@ import time
 from pathlib import Path
 
 import yaml
-from rigid_gym.agents.results import plot_task, table
-from rigid_gym.agents.train import train
+
+from .results import plot_task, table
+from .train import train
 
 
 def parse_param(text: str) -> tuple[str, list]:
@@ -167,7 +168,7 @@ def sweep(env_ids: list[str] | None = None, seeds: list[int] | None = None,
 def write_results(results, folder: Path) -> list[str]:
     """Write ``folder/results.md`` and the curves from a Tune ResultGrid of ``run_trial``s;
     returns one line per failed trial (also in results.md)."""
-    from rigid_gym.agents.train import curve_of, result_record
+    from .train import curve_of, result_record
 
     groups: dict[tuple[str, str], list[dict]] = {}
     failed = []

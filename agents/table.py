@@ -53,7 +53,7 @@ def plan(tasks: list[str], algos: list[str] | None, seeds: list[int], runs: Path
     """Every (env id, algo, seed) of ``tasks`` (only ``algos`` where given), by seed then
     task: {"env_id", "algo", "seed", "name", "state" (done, resume at N, new), "steps",
     "estimate_s"}."""
-    from rigid_gym.agents.train import latest_checkpoint, load_hyperparams, run_name
+    from .train import latest_checkpoint, load_hyperparams, run_name
 
     unknown = [t for t in tasks if t not in RECIPES]
     if unknown:
@@ -93,7 +93,7 @@ def print_plan(entries: list[dict], jobs: int) -> None:
 def run_one(env_id: str, algo: str, seed: int, runs: Path, results: Path,
             checkpoint_freq: int) -> None:
     """One run of the table, resumed from its newest checkpoint if it has one."""
-    from rigid_gym.agents.train import latest_checkpoint, run_directory, train
+    from .train import latest_checkpoint, run_directory, train
 
     checkpoint = latest_checkpoint(run_directory(runs, env_id, algo, seed))
     print(f"{env_id} {algo} seed {seed}: " +
@@ -138,7 +138,7 @@ def launch(entries: list[dict], jobs: int, runs: Path, results: Path,
 
 
 def main(argv: list[str] | None = None) -> int:
-    from rigid_gym.agents.results import RESULTS
+    from .results import RESULTS
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tasks", default="push,throw,stack",

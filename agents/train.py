@@ -1,7 +1,7 @@
 """Train a baseline on a rigid_gym task, on SBX (JAX) where it is installed, else on
 stable-baselines3 (PyTorch) (``rigid_gym.agents.algorithms``).
 
-    from rigid_gym.agents.train import train
+    from .train import train
     run = train("rigid_gym/Push-v0", seed=0)            # settings from hyperparams.yml
 
     rigid-gym train rigid_gym/Push-v0 --seed 0
@@ -46,15 +46,16 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import yaml
-from rigid_gym.agents.algorithms import algorithm_class, learner_for
-from rigid_gym.agents.evaluate import VALIDATION_SEED, load_model, success_rate
-from rigid_gym.agents.progress import note
-from rigid_gym.agents.vec_env import SB3VecEnv
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.vec_env import VecCheckNan, VecMonitor
 
 import rigid_gym  # noqa: F401  (registers the env ids)
 from rigid_gym.checks import integer
+
+from .algorithms import algorithm_class, learner_for
+from .evaluate import VALIDATION_SEED, load_model, success_rate
+from .progress import note
+from .vec_env import SB3VecEnv
 
 HYPERPARAMS = Path(__file__).with_name("hyperparams.yml")
 RESULT_KEYS = ("env_id", "algo", "seed", "env_steps", "wall_s", "cpu_s", "episodes", "success",
@@ -320,7 +321,7 @@ def result_record(record: dict, curve: list[dict], episodes: int, seconds: dict,
     """A result (RESULT_KEYS) from a run.json ``record``, its ``curve`` (the last point the
     final evaluation, of ``episodes`` episodes), its ``seconds`` (``Clock.seconds``) and the
     env steps of the policy evaluated (``selected``; default the run's end)."""
-    from rigid_gym.agents.results import method
+    from .results import method
 
     demo = record.get("demonstrations") or {}
     return {"env_id": record["env_id"], "algo": record["algo"], "seed": record["seed"],
@@ -391,7 +392,7 @@ def add_demonstrations(model, env_id: str, episodes: int, seed: int,
     ``make_demo_buffer`` method (bc_sac) also gets them in a buffer of their own, for its
     behaviour-cloning loss. ``progress``: draw a bar of the episodes on standard error.
     """
-    from rigid_gym.agents import datasets
+    from . import datasets
 
     per_env = -(-episodes // model.n_envs)
     if dataset is not None:
@@ -414,7 +415,7 @@ def fill_replay_buffer(model, dataset, env_id: str, episodes: int) -> dict:
     ceil(episodes / n_envs), step by step as a VecEnv hands SB3 its transitions (the
     episodes of one step across the envs must be equally long); returns ``{"episodes",
     "env_steps", "success_rate"}``."""
-    from rigid_gym.agents import datasets
+    from . import datasets
 
     if dataset.env_spec is None or dataset.env_spec.id != env_id:
         raise ValueError(f"train: demonstrations of {env_id} wanted, dataset {dataset.id} is of "

@@ -20,10 +20,11 @@ from __future__ import annotations
 
 import inspect
 
-from rigid_gym.agents.bc_sac import BCSAC
-from rigid_gym.agents.train import add_demonstrations, hyperparams_table
 from stable_baselines3 import SAC
 from stable_baselines3.common.callbacks import BaseCallback
+
+from .bc_sac import BCSAC
+from .train import add_demonstrations, hyperparams_table
 
 ZOO_ALGOS = {"sac": ("sac", "tqc"), "tqc": ("tqc", "sac"), "bc_sac": ("sac", "tqc"),
              "ppo": ("ppo",)}

@@ -31,7 +31,7 @@
 The header line names the machine and the versions. One world runs on the calling thread
 only; a batch runs there too or is shared out over the core's threads
 (``rigid_gym._core.num_threads``, at most ``RIGID_GYM_NUM_THREADS``), whichever its own
-timings found faster (src/sharing.h).
+timings found faster (src/solver/sharing.h).
 
     python benchmarks/speed.py                   # all three sections, about 4 minutes on 2 cores
                                                  # (half of it MuJoCo's 1000-body pile)

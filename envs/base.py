@@ -21,12 +21,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 from gymnasium.error import ResetNeeded
-from rigid_gym.envs.core import ALL, TaskBatch
-from rigid_gym.envs.options import ARGUMENTS_TABLE, Options, checked_actions
-from rigid_gym.envs.pixels import DEFAULT_SIZE, PixelOptions
-from rigid_gym.envs.task import STEP_TIME, Task
 
 from rigid_gym.recordable import Series
+
+from .core import ALL, TaskBatch
+from .options import ARGUMENTS_TABLE, Options, checked_actions
+from .pixels import DEFAULT_SIZE, PixelOptions
+from .task import STEP_TIME, Task
 
 if TYPE_CHECKING:
     from rigid_gym.render import Renderer

@@ -21,11 +21,17 @@ from typing import NamedTuple
 import numpy as np
 from gymnasium.error import ResetNeeded
 from rigid_gym._core import gather_observations
-from rigid_gym.envs.effector import SuctionGripper, Workspace
-from rigid_gym.envs.observation import PAD, gather_index
-from rigid_gym.envs.options import Options
-from rigid_gym.envs.pixels import CopyFrames
-from rigid_gym.envs.task import (
+
+from rigid_gym.config import SolverConfig
+from rigid_gym.scene import Scene
+from rigid_gym.shapes import Box
+from rigid_gym.world import World
+
+from .effector import SuctionGripper, Workspace
+from .observation import PAD, gather_index
+from .options import Options
+from .pixels import CopyFrames
+from .task import (
     CUBE_HALF,
     CUBE_MASS,
     FRICTION,
@@ -36,11 +42,6 @@ from rigid_gym.envs.task import (
     Task,
     sparse_reward,
 )
-
-from rigid_gym.config import SolverConfig
-from rigid_gym.scene import Scene
-from rigid_gym.shapes import Box
-from rigid_gym.world import World
 
 ALL = slice(None)
 """Every copy of a batch, where methods take the copies to act on."""

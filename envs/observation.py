@@ -118,7 +118,7 @@ def observation_layout(num_cubes: int, has_grip: bool) -> Layout:
 
 def gather_index(layout: Layout, num_bodies: int,
                  bodies: dict[str, int]) -> tuple[np.ndarray, np.ndarray]:
-    """Where ``gather_observations`` (src/observation.h) finds each entry of ``layout`` in a
+    """Where ``gather_observations`` (src/envs/observation.h) finds each entry of ``layout`` in a
     world's state laid side by side: positions (num_bodies x 3), velocities (x 3), rotations
     (x 9, row-major), angular velocities (x 3). ``bodies`` maps a layout's body names to body
     indices. Returns the (size,) int64 index and the (size,) entries subtracted (-1: none;

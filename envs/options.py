@@ -9,9 +9,10 @@ from dataclasses import dataclass
 
 import numpy as np
 from gymnasium import spaces
-from rigid_gym.envs.pixels import DEFAULT_SIZE, PixelOptions
 
 from rigid_gym.checks import in_range
+
+from .pixels import DEFAULT_SIZE, PixelOptions
 
 RENDER_MODES = ("rgb_array", "human")
 REWARD_TYPES = ("sparse", "dense", "shaped")

@@ -5,9 +5,13 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from rigid_gym.envs.base import RigidGymEnv
-from rigid_gym.envs.effector import PAD_HALF_EXTENTS
-from rigid_gym.envs.task import (
+
+from rigid_gym.meshes import prism_mesh
+from rigid_gym.recordable import Marker
+
+from .base import RigidGymEnv
+from .effector import PAD_HALF_EXTENTS
+from .task import (
     DISTANCE_THRESHOLD,
     GOAL_COLOR,
     MARKER_ALPHA,
@@ -18,9 +22,6 @@ from rigid_gym.envs.task import (
     sample_apart,
     staged,
 )
-
-from rigid_gym.meshes import prism_mesh
-from rigid_gym.recordable import Marker
 
 OBJECT_RANGE = 0.15
 """m: the cube starts at x, y uniform in [-0.15, 0.15] (panda-gym's and Fetch's range)."""

@@ -13,10 +13,11 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from rigid_gym.envs.base import RigidGymEnv
-from rigid_gym.envs.effector import PAD_HALF_EXTENTS, STEP_DISTANCE
-from rigid_gym.envs.observation import Layout
-from rigid_gym.envs.task import CUBE_HALF, FRICTION, STEP_TIME
+
+from .base import RigidGymEnv
+from .effector import PAD_HALF_EXTENTS, STEP_DISTANCE
+from .observation import Layout
+from .task import CUBE_HALF, FRICTION, STEP_TIME
 
 PAD_HALF_HEIGHT = PAD_HALF_EXTENTS[2]
 CRUISE_HEIGHT = 0.12

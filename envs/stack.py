@@ -3,8 +3,13 @@
 from __future__ import annotations
 
 import numpy as np
-from rigid_gym.envs.base import RigidGymEnv
-from rigid_gym.envs.task import (
+
+from rigid_gym.recordable import Marker
+from rigid_gym.render import DYNAMIC_PALETTE
+from rigid_gym.shapes import Box
+
+from .base import RigidGymEnv
+from .task import (
     CUBE_HALF,
     DISTANCE_THRESHOLD,
     MARKER_ALPHA,
@@ -14,10 +19,6 @@ from rigid_gym.envs.task import (
     sample_apart,
     staged,
 )
-
-from rigid_gym.recordable import Marker
-from rigid_gym.render import DYNAMIC_PALETTE
-from rigid_gym.shapes import Box
 
 OBJECT_RANGE = 0.15
 """m: each cube starts at x, y uniform in [-0.15, 0.15]."""

@@ -15,10 +15,11 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from rigid_gym.envs.observation import Layout, observation_layout
 
 from rigid_gym.recordable import Marker
 from rigid_gym.scene import Scene
+
+from .observation import Layout, observation_layout
 
 STEP_TIME = 0.04
 """s of simulated time per env step."""

@@ -5,11 +5,12 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from rigid_gym.envs.base import RigidGymEnv
-from rigid_gym.envs.task import GOAL_COLOR, MARKER_ALPHA, Task, closeness, cube_anywhere, staged
 
 from rigid_gym.recordable import Marker
 from rigid_gym.shapes import Box, Compound, Pose, Sphere
+
+from .base import RigidGymEnv
+from .task import GOAL_COLOR, MARKER_ALPHA, Task, closeness, cube_anywhere, staged
 
 OBJECT_RANGE = 0.1
 """m: the cube starts at x, y uniform in [-0.1, 0.1]."""

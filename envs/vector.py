@@ -5,7 +5,7 @@
 The copies are the task's own (the same gripper, observations, rewards and seeding as
 ``gym.make``'s env, which is the same core with B = 1), in one ``World(num_worlds=B)``: the
 solver steps all of them in one call, in parallel over worlds where the batch measures that
-faster than one thread (``src/sharing.h``). Copy i of ``reset(seed=s)`` plays exactly what a
+faster than one thread (``src/solver/sharing.h``). Copy i of ``reset(seed=s)`` plays exactly what a
 single env reset with seed s + i plays (``tests/test_vector.py``).
 
 Autoreset is ``SAME_STEP``: an episode that ends is reset within the same ``step``, whose
@@ -21,16 +21,17 @@ import numpy as np
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
-from rigid_gym.envs import TASKS
-from rigid_gym.envs.base import RigidGymEnv, task_spaces
-from rigid_gym.envs.core import ALL, TaskBatch
-from rigid_gym.envs.options import Options, checked_actions
-from rigid_gym.envs.push import PushEnv
-from rigid_gym.envs.stack import StackEnv
-from rigid_gym.envs.task import CUBE_HALF
-from rigid_gym.envs.throw import ThrowEnv
 
 from rigid_gym.checks import integer
+
+from . import TASKS
+from .base import RigidGymEnv, task_spaces
+from .core import ALL, TaskBatch
+from .options import Options, checked_actions
+from .push import PushEnv
+from .stack import StackEnv
+from .task import CUBE_HALF
+from .throw import ThrowEnv
 
 
 class RigidGymVectorEnv(VectorEnv):

@@ -1,7 +1,7 @@
 """Contacts as a World reports them, and the choice of broad phase.
 
-The detection itself is in the compiled core (``src/broad_phase.cpp``, ``src/narrow_phase.cpp``,
-``src/queries.cpp``): ``World.contacts`` asks it for the contacts at the current poses with
+The detection itself is in the compiled core (``src/collision/broad_phase.cpp``, ``src/collision/narrow_phase.cpp``,
+``src/solver/queries.cpp``): ``World.contacts`` asks it for the contacts at the current poses with
 buffers of its own, so asking never disturbs what the last step listed.
 """
 
@@ -11,7 +11,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-# the solver's touching tolerance, m (src/patch.h CLOSED_GAP): contacts() reports contacts
+# the solver's touching tolerance, m (src/solver/patch.h CLOSED_GAP): contacts() reports contacts
 # this close as touching
 from rigid_gym._core import TOUCHING_GAP as TOUCHING_GAP  # noqa: PLC0414 - explicit re-export
 

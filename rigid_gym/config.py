@@ -24,7 +24,7 @@ ROTATION_ORDERS = (1, 2, 3)
 
 @dataclass(frozen=True)
 class SolverConfig:
-    """Switches and counts for the step (``step_world`` in ``src/step.cpp``).
+    """Switches and counts for the step (``step_world`` in ``src/solver/step.cpp``).
 
     collision_passes: sweeps of the collision phase (real restitution, old velocities); 0
         switches the phase off. Where every restitution is 0 an impact is left to the contact
@@ -34,7 +34,7 @@ class SolverConfig:
     contact_passes: sweeps of the contact phase (restitution ramping from -0.9 to 0).
     shock_sweeps: sweeps per level of shock propagation; 0 switches it off. It only matters
         where a body can rest on another (or on the ground) under gravity; resting contact
-        is made exact there (``src/patch.h``).
+        is made exact there (``src/solver/patch.h``).
     rotation_order: 1 = the exact rotation through omega dt, omega taken at the start
         of the step (first order); 2 = Buss's second-order update (omega + h/2 alpha);
         3 = Buss's third-order update. Cost grows slightly with the order.
@@ -44,7 +44,7 @@ class SolverConfig:
     sweep: broad phase by sort-and-sweep (True) or brute force (False); None chooses
         sort-and-sweep from ``collision.SWEEP_MIN_BODIES`` bounded bodies.
     sleep: skip an island of bodies in contact (a stack, a cube on the table) while its step
-        is a fixed point (``src/sleep.h``); exact, so off only to measure what it saves.
+        is a fixed point (``src/solver/sleep.h``); exact, so off only to measure what it saves.
     sleep_speed: m/s, 0 to 10; above 0 (and with ``sleep``), an island whose every point
         has moved slower than this for 0.5 s is stopped (its velocities zeroed)
         and sleeps until something touches or pushes it, as Box2D and MuJoCo sleep: what a
@@ -54,11 +54,11 @@ class SolverConfig:
     keep_energy: after each rotation update, turn a dynamic body's orientation by the smallest
         body-frame rotation that gives it back the rotational kinetic energy it had (L is the
         stored state, so |L| is exact anyway): a free body then keeps |L| and E to round-off
-        at any dt, a projection that keeps the rotation order's accuracy (``src/integrate.h``).
+        at any dt, a projection that keeps the rotation order's accuracy (``src/solver/integrate.h``).
         Off, the rotation order's energy error shows (what the order studies measure).
     overlap_correction: after the impulse phases, push apart contacts that overlap by more
         than 0.1 mm by this fraction of the excess per step (translations only, split by
-        inverse mass: no velocity, orientation or energy changes; ``src/overlap.h``); 0
+        inverse mass: no velocity, orientation or energy changes; ``src/solver/overlap.h``); 0
         switches it off (GBF as published: overlap once made stays). The default, 1, removes
         the excess within the step that made it: overlap the velocity-level phases cannot
         see (the corner of a fast-turning box sweeping into a neighbour and out of it again
@@ -66,7 +66,7 @@ class SolverConfig:
     detect_every_pass: run the narrow phase again at the predicted poses in every pass of
         every impulse phase (the original GBF formulation) instead of finding each pair's
         contacts once per step and carrying their separations through the passes
-        (``src/contacts.h``); kept to measure what the difference costs and changes.
+        (``src/solver/contacts.h``); kept to measure what the difference costs and changes.
     """
 
     collision_passes: int = 5
@@ -127,7 +127,7 @@ class SolverConfig:
         return cls(**{**derived, **overrides})
 
     def core_settings(self, gravity: np.ndarray, sweep: bool) -> dict:
-        """The core's view of this config (``Settings`` in ``src/world.h``) for a scene with
+        """The core's view of this config (``Settings`` in ``src/solver/world.h``) for a scene with
         ``gravity`` (3,) m/s^2, the broad phase by sort and sweep or not."""
         magnitude = float(np.linalg.norm(gravity))
         up = -gravity / magnitude if magnitude > 0.0 else np.array([0.0, 0.0, 1.0])

@@ -2,7 +2,7 @@
 
 Every body becomes one or more *geoms* (a Compound contributes one per part), each a primitive
 placed in the body's principal frame. Following Guendelman, Bridson & Fedkiw 2003, a geom
-answers a signed distance phi (``src/geometry.h``) and carries *surface samples*:
+answers a signed distance phi (``src/collision/geometry.h``) and carries *surface samples*:
 
     Box    its 8 corners plus ``edge_segments - 1`` points inside each edge, so that edge-edge
            crossings are seen (measured in benchmarks/box_edge_samples.py)

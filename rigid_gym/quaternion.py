@@ -1,6 +1,6 @@
 """Unit quaternions on the Python side (vectorised numpy), ordered (w, x, y, z).
 
-The compiled core has its own scalar versions (``src/math.h``); tests check that both agree.
+The compiled core has its own scalar versions (``src/base/math.h``); tests check that both agree.
 These are for building scenes, validating input and analysing results.
 """
 

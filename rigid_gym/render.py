@@ -6,7 +6,7 @@
 
 Every shape is tessellated once into a closed triangle mesh in its shape frame (a Plane into a
 finite, tiled square patch: a table top); each frame moves the triangles with the body poses
-and draws them with a z-buffer (the core's ``src/frames.h`` over ``src/raster.cpp``): a
+and draws them with a z-buffer (the core's ``src/render/frames.h`` over ``src/render/raster.cpp``): a
 perspective camera, back-face culling, Gouraud-interpolated Lambert shading from one
 directional light plus ambient, and the bodies' shadows from an orthographic shadow map.
 Translucent markers (alpha < 1) are blended over the opaque scene, nearest one per pixel.

@@ -32,7 +32,7 @@ class BodySpec:
     """One validated body. Arrays are float64; poses are of the principal (body) frame.
 
     shape: the body's shape, in its shape frame.
-    motion: STATIC, KINEMATIC or DYNAMIC (``rigid_gym._core``; ``src/integrate.h``).
+    motion: STATIC, KINEMATIC or DYNAMIC (``rigid_gym._core``; ``src/solver/integrate.h``).
     mass: kg (inf for static and kinematic bodies).
     principal_moments: (3,) kg m^2 about the centre of mass, principal axes (0 if not dynamic).
     body_from_shape: Pose of the shape frame in the body frame (centre of mass at the origin).

@@ -364,7 +364,7 @@ class World:
         {"on": whether the config runs it, "seconds": wall time spent in it (s) while
         ``profiling``, "calls": how many times it ran}, summed over every world and every
         step since the World was made (resets included). The step counts and times its
-        stages itself (``src/timers.h``); a batch's seconds add up its worlds' time on every
+        stages itself (``src/solver/timers.h``); a batch's seconds add up its worlds' time on every
         thread.
 
         A stage with nothing to do in a step is not run (no listed pair: no collision, contact

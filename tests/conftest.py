@@ -33,7 +33,7 @@ def two_threads():
 def step_both_ways(two_threads):
     """``step_both_ways(world, steps)``: ``world.step(1)`` ``steps`` (>= 2) times, with the
     pool at two threads. A batch's first call is shared out over the pool and its second runs
-    on the calling thread (src/sharing.h), so both ways step it: checked."""
+    on the calling thread (src/solver/sharing.h), so both ways step it: checked."""
 
     def run(world, steps: int) -> None:
         ways = set()

@@ -504,7 +504,7 @@ def test_the_readme_task_table_states_each_task_s_sizes():
 
 
 def test_observations_are_the_state_entries_their_index_names():
-    """``gather_observations`` (src/observation.h) against the same index applied by numpy to
+    """``gather_observations`` (src/envs/observation.h) against the same index applied by numpy to
     the state laid side by side, over worlds of random state: entry j is state entry index[j]
     minus entry minus[j] (a cube's offset from the pad) in the worlds asked for, and a state
     entry out of range is refused by name before anything is read."""

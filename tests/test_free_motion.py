@@ -166,7 +166,7 @@ def test_bodies_listed_together_that_never_touch_keep_their_energy():
 
 def test_rotation_substeps_are_quarter_turns_and_at_most_64():
     """A step is cut into sub-steps of at most a quarter turn, but into no more than 64 of
-    them (src/integrate.h), so its cost is bounded whatever the speed; a NaN speed (never
+    them (src/solver/integrate.h), so its cost is bounded whatever the speed; a NaN speed (never
     reached: setters refuse it) takes one."""
     dt = 1 / 240
     quarter = (np.pi / 2) / dt  # rad/s that turn a quarter per step
@@ -227,7 +227,7 @@ def test_thin_rod_and_point_mass_spin_without_nan(order):
 
 
 def test_core_and_numpy_quaternions_agree():
-    """The core's rotation matrices (src/math.h) are the numpy ones (rigid_gym.quaternion) of
+    """The core's rotation matrices (src/base/math.h) are the numpy ones (rigid_gym.quaternion) of
     the same unit quaternions, and back."""
     rng = np.random.default_rng(0)
     q = quat.normalize(rng.normal(size=(50, 4)))

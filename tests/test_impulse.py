@@ -92,7 +92,7 @@ def test_no_impact_with_friction_adds_kinetic_energy():
     """Random eccentric impacts of a unit cube's corner on the ground at e = 1, mu = 0.5: with
     K coupling normal and tangent, Newton's restitution with Coulomb friction in one impulse
     gains energy for some of them (Kane & Levinson), so the core falls back to the
-    frictionless impulse there (src/impulse.h). The energy change j.v + j.K j / 2 must never
+    frictionless impulse there (src/solver/impulse.h). The energy change j.v + j.K j / 2 must never
     be positive (beyond round-off), and where friction is kept it is the combined impulse."""
     rng = np.random.default_rng(7)
     kept = 0

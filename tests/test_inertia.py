@@ -1,4 +1,4 @@
-"""Mass properties (rigid_gym.inertia), the mesh distances they use (src/mesh_distance.h) and
+"""Mass properties (rigid_gym.inertia), the mesh distances they use (src/collision/mesh_distance.h) and
 the test meshes."""
 
 import math
@@ -169,7 +169,7 @@ def test_combine_rejects_nothing_to_combine():
         combine([])
 
 
-# --- mesh distances (src/mesh_distance.h) -------------------------------------------------
+# --- mesh distances (src/collision/mesh_distance.h) -------------------------------------------------
 
 
 def test_winding_number_of_the_l_including_its_notch():

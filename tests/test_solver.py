@@ -324,10 +324,10 @@ def _boxes_pushed_into_a_wall(shock_sweeps: int, force: float) -> tuple[float, f
 @pytest.mark.parametrize("sweeps, bound", [(2, 2e-4), (20, 1e-6)])
 def test_a_box_pushed_sideways_into_a_wall_holds(sweeps, bound):
     """Shock propagation resolves the inner box against its frozen supports (wall, floor),
-    then its pair with the outer box, then the supports again (``src/shock.cpp``): a sweep
+    then its pair with the outer box, then the supports again (``src/solver/shock.cpp``): a sweep
     never ends on the pair's impulse, which left the box moving into the wall (it sank 3 mm
     in 1 s). Two sweeps leave the pair slightly unconverged, so the outer box presses the
-    inner one into the wall until the overlap correction holds it (``src/overlap.h``: at
+    inner one into the wall until the overlap correction holds it (``src/solver/overlap.h``: at
     its 0.1 mm slop; bound 0.2 mm); 20 sweeps converge, and the wall holds it to 1 um."""
     inside, _ = _boxes_pushed_into_a_wall(sweeps, 5.0)
     assert inside < bound
@@ -344,7 +344,7 @@ def test_a_struck_box_meets_its_resting_neighbour_in_the_same_step():
     """A 1 kg box at 5 m/s hits a resting one with a third 10 mm beyond it, no gravity, e = 0.
     The broad phase grows a box by its reach at the step's starting velocity, so the struck
     box's pair with the third is listed only when the step runs its impulse phases again
-    (``src/step.cpp``, MAX_RELISTS). With that pair listed the contact phase leaves no
+    (``src/solver/step.cpp``, MAX_RELISTS). With that pair listed the contact phase leaves no
     overlap (checked by growing every box by 5 cm: 0 mm), so 0.5 mm is a bound well above
     round-off and well below the 2.5 mm of a contact found one step late (before the relist)."""
     h = 0.05
@@ -408,7 +408,7 @@ def step_with_interventions(world, steps):
 
 
 def test_sleeping_is_exact():
-    """An island whose last step changed nothing is skipped (src/sleep.h): states and pair
+    """An island whose last step changed nothing is skipped (src/solver/sleep.h): states and pair
     impulses are bit-identical to stepping everything, through a ball striking a resting
     cube, a pad landing on one and pushing it, a new mass and a force; and bodies did sleep
     (else the test would pass vacuously)."""
@@ -603,7 +603,7 @@ def into_block(world, first, x, which):
 @pytest.mark.parametrize("restitution", [0.0, 0.3])
 def test_the_contact_pool_never_changes_a_trajectory(restitution):
     """The contact pool grows to what a step needs; a step whose contacts do not fit is run
-    again once it has (src/contacts.h). 48 cubes lying apart are set into a 4 x 4 x 3 block
+    again once it has (src/solver/contacts.h). 48 cubes lying apart are set into a 4 x 4 x 3 block
     of touching faces (far more contact rows than the pool first holds) beside 8 cubes that
     rest apart throughout (asleep, taking no rows, with sleeping on). A fresh world outgrows
     its pool in that step (in the contact stage, or with restitution in the collision
@@ -679,7 +679,7 @@ def pyramid_alone_and_in_a_batch(steps, packs):
 
 
 def test_a_neighbour_outgrowing_the_contact_pool_leaves_a_world_as_it_is():
-    """Each world's contact pool grows with its own steps only (src/world.h), so a step
+    """Each world's contact pool grows with its own steps only (src/solver/world.h), so a step
     that a world runs again for its contacts (which wakes it) is run again alone and in
     any batch. With sleep_speed, where a woken world counts its islands' slow time afresh,
     a pyramid's world whose 48 cubes are set into a block while the pyramid slows down
@@ -730,7 +730,7 @@ def test_a_slow_island_is_stopped_by_sleep_speed_and_sleeps_until_struck():
 
 def test_pairs_carried_past_sleeping_bodies_are_the_pairs_the_broad_phase_lists():
     """The broad phase tests no pair of two bodies that slept through the last step unchanged
-    and takes it from the last step's list (src/sleep.h, mark_kept). The pyramid stopped by
+    and takes it from the last step's list (src/solver/sleep.h, mark_kept). The pyramid stopped by
     sleep_speed sleeps while the ball rolls towards it, then wakes when struck: at every step,
     a fresh world started from the same state (every array copied, bit for bit) lists the
     same pairs in its first step, all of them tested."""
@@ -768,7 +768,7 @@ def test_a_sleeping_cube_reports_its_weight_as_the_support_impulse():
 @pytest.mark.parametrize("fraction", [1.0, 0.2])
 @pytest.mark.parametrize("case", ["box 1 cm inside the ground", "two boxes overlapping by 1 cm"])
 def test_overlap_given_as_the_initial_state_is_removed_without_launching_anything(case, fraction):
-    """The overlap correction (``src/overlap.h``) pushes bodies apart by positions alone. The
+    """The overlap correction (``src/solver/overlap.h``) pushes bodies apart by positions alone. The
     default (all of the excess) leaves the slop, 0.1 mm, after the first step; a fifth of it
     per step leaves under 0.2 mm (twice the slop) within 0.25 s. No body ever moves faster
     than 0.1 m/s (velocities are not touched; GBF's impulses only stop the approach)."""

@@ -318,7 +318,7 @@ def test_the_model_is_read_only_and_changes_through_set_material():
 
 
 def test_a_batch_steps_the_way_its_paired_timings_find_cheaper():
-    """src/sharing.h, fed timings by hand: the first two calls run one way each; then the
+    """src/solver/sharing.h, fed timings by hand: the first two calls run one way each; then the
     cheaper way, with a probe of the other now and then; when the costs turn round, the
     choice follows within a few probes."""
     sharing = _core.BatchSharing()

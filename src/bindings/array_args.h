@@ -13,7 +13,7 @@
 #include <string>
 #include <type_traits>
 
-#include "span.h"
+#include "base/span.h"
 
 namespace rg {
 

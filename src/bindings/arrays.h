@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "span.h"
+#include "base/span.h"
 
 namespace rg {
 

@@ -1,9 +1,9 @@
-// Python face of the gripper's command (src/footprint.h): rigid_gym._core.command_pads, used by
+// Python face of the gripper's command (src/envs/footprint.h): rigid_gym._core.command_pads, used by
 // envs/effector.py.
 #include <string>
 
-#include "array_args.h"
-#include "footprint.h"
+#include "bindings/array_args.h"
+#include "envs/footprint.h"
 
 namespace rg {
 
@@ -81,7 +81,7 @@ void bind_footprint(nb::module_& m) {
         nb::arg("held"), nb::arg("low"), nb::arg("high"), nb::arg("step_distance"),
         nb::arg("step_time"), nb::arg("boxes_x"), nb::arg("boxes_r"), nb::arg("targets"),
         nb::arg("lowest"),
-        "One env step's command of the gripper of every world (src/footprint.h): the pad's "
+        "One env step's command of the gripper of every world (src/envs/footprint.h): the pad's "
         "target is its centre plus step_distance (m) x motion, clamped to [low, high] (3,) m; "
         "a downward move stops where the pad, or the box it holds, would rest on the table or "
         "on the top of a box under its footprint (never lifting the pad); the pad's velocity is "

@@ -2,14 +2,14 @@
 // formulas for their tests: one source for both languages.
 #include <nanobind/stl/array.h>
 
-#include "arrays.h"
-#include "body.h"
-#include "geometry.h"
-#include "impulse.h"
-#include "integrate.h"
-#include "narrow_phase.h"
-#include "patch.h"
-#include "step.h"
+#include "bindings/arrays.h"
+#include "base/body.h"
+#include "collision/geometry.h"
+#include "solver/impulse.h"
+#include "solver/integrate.h"
+#include "collision/narrow_phase.h"
+#include "solver/patch.h"
+#include "solver/step.h"
 
 namespace rg {
 
@@ -63,7 +63,7 @@ void bind_geometry(nb::module_& m) {
     m.attr("MAX_ROTATION_SUBSTEPS") = MAX_ROTATION_SUBSTEPS;
     m.def("rotation_substeps", &rotation_substeps, nb::arg("speed"), nb::arg("dt"),
           "Sub-steps of the rotation update for angular speed |omega| (rad/s) over dt (s): "
-          "quarter turns, at most MAX_ROTATION_SUBSTEPS (src/integrate.h).");
+          "quarter turns, at most MAX_ROTATION_SUBSTEPS (src/solver/integrate.h).");
     m.def(
         "add_point_mass_matrix",
         [](double inverse_mass, const std::array<std::array<double, 3>, 3>& rotation,
@@ -76,7 +76,7 @@ void bind_geometry(nb::module_& m) {
         },
         nb::arg("inverse_mass"), nb::arg("rotation"), nb::arg("inverse_moments"), nb::arg("r"),
         nb::arg("k"),
-        "k + (1/M) 1 + r*^T I^-1 r* (src/impulse.h) as nested lists, for one body: inverse "
+        "k + (1/M) 1 + r*^T I^-1 r* (src/solver/impulse.h) as nested lists, for one body: inverse "
         "mass 1/kg, rotation (3, 3), principal inverse moments (3,), lever r (3,) m.");
     m.def(
         "contact_impulse",
@@ -86,7 +86,7 @@ void bind_geometry(nb::module_& m) {
             return std::array<double, 3>{j.x, j.y, j.z};
         },
         nb::arg("k"), nb::arg("v"), nb::arg("n"), nb::arg("e"), nb::arg("mu"),
-        "The impulse (3,) N s on body 1 of a contact (src/impulse.h): summed matrix k (3, 3), "
+        "The impulse (3,) N s on body 1 of a contact (src/solver/impulse.h): summed matrix k (3, 3), "
         "relative velocity v (3,) m/s with v.n < 0, normal n (3,), restitution e, friction mu.");
 }
 

@@ -1,10 +1,10 @@
-// Python face of the mesh distances (src/mesh_distance.h): rigid_gym._core.winding_number and
+// Python face of the mesh distances (src/collision/mesh_distance.h): rigid_gym._core.winding_number and
 // signed_distance, used by rigid_gym/shapes.py, geometry.py (distance grids) and the tests.
 #include <string>
 
-#include "array_args.h"
-#include "geometry.h"
-#include "mesh_distance.h"
+#include "bindings/array_args.h"
+#include "collision/geometry.h"
+#include "collision/mesh_distance.h"
 
 namespace rg {
 
@@ -36,7 +36,7 @@ void bind_mesh(nb::module_& m) {
         },
         nb::arg("points"), nb::arg("vertices"), nb::arg("triangles"), nb::arg("out"),
         "Generalised winding number of each point: the signed solid angles of all triangles / "
-        "4 pi (src/mesh_distance.h). points (P, 3) float64, m; vertices (V, 3) float64, m; "
+        "4 pi (src/collision/mesh_distance.h). points (P, 3) float64, m; vertices (V, 3) float64, m; "
         "triangles (T, 3) int32, counter-clockwise seen from outside; out (P,) float64, "
         "written: 1 inside a closed outward mesh, 0 outside, 1/2 on the surface (up to "
         "rounding). Right for nonconvex meshes too (Jacobson et al. 2013). The points are "
@@ -47,7 +47,7 @@ void bind_mesh(nb::module_& m) {
             call_checked(signed_distance, "signed_distance", points, vertices, triangles, out);
         },
         nb::arg("points"), nb::arg("vertices"), nb::arg("triangles"), nb::arg("out"),
-        "Signed distance of each point to the mesh surface, m (src/mesh_distance.h). points "
+        "Signed distance of each point to the mesh surface, m (src/collision/mesh_distance.h). points "
         "(P, 3) float64, m; vertices (V, 3) float64, m; triangles (T, 3) int32; out (P,) "
         "float64, written. Magnitude: exact distance to the nearest triangle. Sign: negative "
         "where the winding number exceeds 1/2 (inside), positive elsewhere. The points are "

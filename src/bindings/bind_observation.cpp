@@ -1,7 +1,7 @@
-// Python face of the envs' observation rows (src/observation.h):
+// Python face of the envs' observation rows (src/envs/observation.h):
 // rigid_gym._core.gather_observations, used by envs/core.py.
-#include "array_args.h"
-#include "observation.h"
+#include "bindings/array_args.h"
+#include "envs/observation.h"
 
 namespace rg {
 
@@ -50,7 +50,7 @@ void bind_observation(nb::module_& m) {
         nb::arg("angular_velocity"), nb::arg("worlds"), nb::arg("index"), nb::arg("minus"),
         nb::arg("out"),
         "Observation rows of the worlds `worlds` (k,) int64 into out (k, m) float64 "
-        "(src/observation.h); returns whether every entry is finite. A world's state entries "
+        "(src/envs/observation.h); returns whether every entry is finite. A world's state entries "
         "are its positions (n x 3, m), velocities (n x 3, m/s), rotations (n x 9, row-major) "
         "and angular velocities (n x 3, rad/s) side by side (the arrays of World.state, "
         "(B, n, ...)); entry j of a row is entry index[j] (m,) int64, minus entry minus[j] "

@@ -1,12 +1,12 @@
-// Python face of the renderer's core (src/frames.h): rigid_gym._core.FrameRenderer, which
+// Python face of the renderer's core (src/render/frames.h): rigid_gym._core.FrameRenderer, which
 // rigid_gym/render.py builds from its tessellated scene and draws one world or a batch with.
 // Drawing releases the GIL; one renderer draws one batch at a time.
 #include <memory>
 #include <mutex>
 #include <string>
 
-#include "array_args.h"
-#include "frames.h"
+#include "bindings/array_args.h"
+#include "render/frames.h"
 
 namespace rg {
 
@@ -45,7 +45,7 @@ struct BoundRenderer {
 void bind_render(nb::module_& m) {
     nb::class_<BoundRenderer> cls(
         m, "FrameRenderer",
-        "Frames of copies of one triangle soup (src/frames.h): every copy's picture in one "
+        "Frames of copies of one triangle soup (src/render/frames.h): every copy's picture in one "
         "call, on the core's threads. rigid_gym.render.Renderer builds and drives it.");
     cls.def(
         "__init__",
@@ -129,7 +129,7 @@ void bind_render(nb::module_& m) {
         },
         nb::arg("eye"), nb::arg("axes"), nb::arg("focal"), nb::arg("near"), nb::arg("light"),
         nb::arg("light_axes"), nb::arg("ambient"), nb::arg("background"),
-        "The camera and light of every later frame (src/frames.h, FrameView): eye (3,) m, "
+        "The camera and light of every later frame (src/render/frames.h, FrameView): eye (3,) m, "
         "axes (3, 3) rows right, up, forward; focal, pixels; near, m; light (3,) unit vector "
         "towards the light; light_axes (3, 3) rows u, v, light; ambient; background (3,) RGB.");
     cls.def(

@@ -5,12 +5,12 @@
 
 #include <string>
 
-#include "arrays.h"
-#include "integrate.h"
-#include "queries.h"
-#include "step.h"
-#include "thread_pool.h"
-#include "world.h"
+#include "bindings/arrays.h"
+#include "solver/integrate.h"
+#include "solver/queries.h"
+#include "solver/step.h"
+#include "base/thread_pool.h"
+#include "solver/world.h"
 
 namespace rg {
 
@@ -109,10 +109,10 @@ void bind_world(nb::module_& m) {
     for (const char* name : STAGE_NAMES) {
         stages.append(name);
     }
-    m.attr("STAGES") = nb::tuple(stages);  // the step's stages in order (src/timers.h)
+    m.attr("STAGES") = nb::tuple(stages);  // the step's stages in order (src/solver/timers.h)
     Context cls(m, "StepContext",
                 "Every buffer the step reads and writes for a batch of worlds of one scene "
-                "(src/world.h). rigid_gym.World owns one; its state arrays are views of it.");
+                "(src/solver/world.h). rigid_gym.World owns one; its state arrays are views of it.");
     cls.def(
         "__init__",
         [](StepContext* self, int num_worlds, nb::dict geometry, InArray<int32_t> motion,
@@ -158,7 +158,7 @@ void bind_world(nb::module_& m) {
         },
         nb::arg("steps"), nb::arg("dt"),
         "Advance every world by `steps` steps of dt (s), counting (and, when timed, timing) "
-        "each stage (src/timers.h); the GIL is released meanwhile.");
+        "each stage (src/solver/timers.h); the GIL is released meanwhile.");
     cls.def(
         "refresh",
         [](StepContext& c, int first, int last) {
@@ -225,7 +225,7 @@ void bind_world(nb::module_& m) {
             return c.sharing.last() == 2;
         },
         "Whether the last step was shared out over the thread pool (True) or ran on the "
-        "calling thread (False), as the batch's measured costs chose (src/sharing.h); None "
+        "calling thread (False), as the batch's measured costs chose (src/solver/sharing.h); None "
         "before a batch of several worlds has stepped with more than one thread.");
     cls.def(
         "force_sharing",
@@ -235,10 +235,10 @@ void bind_world(nb::module_& m) {
         nb::arg("shared").none(),
         "Step every call from now on shared out over the pool (True) or on the calling thread "
         "(False), or as the batch's timings choose (None, the default; the choice starts "
-        "afresh, shared then alone): src/sharing.h. One world or a pool of one thread always "
+        "afresh, shared then alone): src/solver/sharing.h. One world or a pool of one thread always "
         "steps on the calling thread.");
     cls.def_rw("timed", &StepContext::timed,
-               "Read the clock in every stage of every step, for stage_seconds (src/timers.h).");
+               "Read the clock in every stage of every step, for stage_seconds (src/solver/timers.h).");
     cls.def_prop_ro(
         "stage_seconds",
         [](StepContext& c) {
@@ -278,7 +278,7 @@ void bind_world(nb::module_& m) {
             return hand_over(std::move(pairs), {k, 2});
         },
         "World w's broad-phase pairs at its current poses, boxes grown by margin (m): (k, 2) "
-        "body indices (src/queries.h).");
+        "body indices (src/solver/queries.h).");
     cls.def(
         "contacts",
         [](StepContext& c, double margin, int first, int last) {
@@ -296,12 +296,12 @@ void bind_world(nb::module_& m) {
                                    hand_over(std::move(rows.normal), {k, 3}),
                                    hand_over(std::move(rows.depth), {k}));
         },
-        "Contacts at the current poses of worlds [first, last) (src/queries.h): world, body_a, "
+        "Contacts at the current poses of worlds [first, last) (src/solver/queries.h): world, body_a, "
         "body_b (k,), point, normal (k, 3), depth (k,).");
     nb::class_<BatchSharing>(m, "BatchSharing",
                              "The choice between stepping a batch on the calling thread and "
                              "sharing it out over the pool, as each StepContext makes it from "
-                             "its own timings (src/sharing.h); here to be fed timings by hand.")
+                             "its own timings (src/solver/sharing.h); here to be fed timings by hand.")
         .def(nb::init<>())
         .def("share", &BatchSharing::share, "Share the next call out over the pool?")
         .def("record", &BatchSharing::record, nb::arg("shared"), nb::arg("seconds"),

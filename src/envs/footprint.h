@@ -1,0 +1,62 @@
+// The envs' gripper command: where the pad goes in an env step, and how low it may go before
+// it, or the box it holds, lands on the table or on top of another box.
+//
+// The gripper stops a downward move where the pad, or the object it holds, would rest on the
+// table (z = 0) or on the top of a free box under its footprint (envs/effector.py).
+// Footprints are the boxes' shadows on the table, compared by separating axes in the plane.
+#pragma once
+
+#include <cstdint>
+
+#include "base/math.h"
+#include "base/span.h"
+
+namespace rg {
+
+// The batch of worlds lowest_centres reads, and the work rows it fills. B worlds of n bodies
+// each, K boxes; every index must be in range (the bindings check them).
+struct FootprintQuery {
+    Span<const Vec3> targets;    // (B,) m, the pad's centre at its target
+    Span<const Vec3> positions;  // (B n,) m, every body of every world
+    Span<const Mat3> rotations;  // (B n,)
+    int64_t num_bodies = 0;      // n
+    int64_t pad = 0;             // the pad's body index
+    Vec3 pad_half = {};          // m
+    Span<const int64_t> objects;  // (K,) the boxes' body indices, the same in every world
+    Span<const Vec3> halves;     // (K,) m, their half extents
+    Span<const int64_t> held;    // (B,) the held box, an index into objects (-1: none)
+    // Work rows, overwritten world by world: the parts (the pad, then the held box) and the
+    // boxes of the world in hand.
+    Span<Vec3> parts_x;     // (2,) m
+    Span<Mat3> parts_r;     // (2,)
+    Span<Vec3> parts_half;  // (2,) m
+    Span<Vec3> boxes_x;     // (K,) m
+    Span<Mat3> boxes_r;     // (K,)
+};
+
+// For the gripper of every world: the lowest z (m) its centre may take at its target, into
+// out (B,). That is where one of its parts (the pad, and the object it holds, at the target)
+// would rest on the table or on the top of one of the boxes under its footprint. A box counts
+// as under a part if its top is below the part's bottom before the move (the part's bottom at
+// the target minus the move's z, m); the held box is ignored.
+void lowest_centres(const FootprintQuery& query, Span<double> out);
+
+// One env step's command of every world's pad (the query's targets are ignored: the targets
+// are made here).
+struct PadCommand {
+    Span<const Vec3> motions;  // (B,) each axis in [-1, 1]
+    double step_distance = 0;  // m of motion per unit, along each axis
+    Vec3 low = {}, high = {};  // m, the workspace the pad's centre stays in
+    double step_time = 0;      // s, the env step
+    Span<Vec3> velocities;     // (B n,) m/s, every body of every world: the pads' are written
+    Span<Vec3> targets;        // (B,) m, work rows
+    Span<double> lowest;       // (B,) m, work rows
+};
+
+// Command every pad: its target is its centre plus step_distance * motion, clamped to the
+// workspace; a downward move stops at lowest_centres' z for that target, but never lifts the
+// pad above where it is; the pad's velocity is set to reach its target in step_time (the pad
+// is kinematic, and never turns). The arithmetic is numpy's on (B, 3) arrays, in its order.
+void command_pads(FootprintQuery query, const PadCommand& command);
+
+}  // namespace rg
