@@ -188,8 +188,8 @@ def rate_text(rate: float) -> str:
 WARM_SHARE = 24
 """A settled scene's timing of ``steps`` follows ``steps // WARM_SHARE`` (at least 1) untimed
 ones: each engine's turn comes after the others' (MuJoCo's 1000-body pile fills the caches
-with its own data), and a sleeping stack's step costs ~2 us, so a cold start would weigh as
-much as its 240 timed steps."""
+with its own data), and a sleeping stack's step is so cheap that a cold start would weigh as
+much as its timed steps."""
 
 
 def stepping_rate(world, steps: int, from_start: bool = False) -> float:
