@@ -105,7 +105,8 @@ def test_the_same_seed_gives_the_same_bytes_in_other_processes_and_thread_counts
         assert out.stdout.strip() == here, f"{threads} threads"
 
 
-@pytest.mark.parametrize("task", ["Push", "Stack", "Throw"])
+@pytest.mark.parametrize("task", ["Push", "Stack", "Throw", "Reach", "PickAndPlace", "Slide",
+                                  "Flip"])
 @pytest.mark.parametrize("name", CAMERA_NAMES)
 def test_every_camera_frames_the_task_box(task, name):
     """Every corner of the task's VIEWED box (where the cubes, goals and the bin can be)
