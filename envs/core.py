@@ -235,7 +235,7 @@ class TaskBatch:
             vectors[:, self.holding] = (gripper.held[copies] >= 0)[:, None]
         if not finite:  # a solver failure: say so here, not in a network
             self.refuse_non_finite(vectors, worlds)
-        achieved = self.task.achieved_goal(vectors).astype(np.float32)
+        achieved = self.task.achieved_goal(vectors, s, worlds, self.cubes).astype(np.float32)
         clean = vectors  # the true state (noise makes a new array)
         noise = self.options.observation_noise
         if noise > 0.0:

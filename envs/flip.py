@@ -139,10 +139,11 @@ class Flip(Task):
     table_friction = TABLE_FRICTION
     markers_in_pixels = False
 
-    def achieved_goal(self, vectors):
-        rotations = rotation_matrices(vectors[:, self.observation_layout.slice(
-            "cube0.orientation")])
-        return np.array([quaternion.from_matrix(r) for r in rotations])
+    def achieved_goal(self, vectors, state, worlds, cubes):
+        # the World's own quaternion of the cube (its principal frame is its shape frame), the
+        # sign made w >= 0
+        q = state.orientation[worlds, cubes[0]]
+        return np.where(q[:, :1] < 0.0, -q, q)
 
     def place_cubes(self, rngs, half):
         return cube_anywhere(rngs, half, OBJECT_RANGE)

@@ -82,9 +82,12 @@ class Task:
         return self.observation_layout.entries([f"cube{k}.position"
                                                 for k in range(self.num_cubes)])
 
-    def achieved_goal(self, vectors: np.ndarray) -> np.ndarray:
-        """The achieved goals (k, goal_size) of copies whose observation vectors (noise-free)
-        are ``vectors`` (k, layout size), float64: their ``achieved_columns``."""
+    def achieved_goal(self, vectors: np.ndarray, state, worlds: np.ndarray,
+                      cubes: list[int]) -> np.ndarray:
+        """The achieved goals (k, goal_size) float64 of copies ``worlds`` (k,) of the World
+        whose ``state`` (World.state) holds them, their observation vectors (noise-free)
+        ``vectors`` (k, layout size), the cubes' body indices ``cubes``: the vectors'
+        ``achieved_columns`` unless a task reads the state."""
         return vectors[:, self.achieved_columns]
 
     def object_shape(self, half: float):
