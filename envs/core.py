@@ -134,7 +134,7 @@ class TaskBatch:
                                                bodies)
         if self.options.pixels.pixels:
             self.frames = CopyFrames(scene, self.task, half, self.options.pixels,
-                                     self.num_worlds)
+                                     self.num_worlds, self.cubes)
 
     def built(self) -> tuple[World, SuctionGripper]:
         """The World and its gripper, which the first reset builds."""

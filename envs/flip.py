@@ -9,6 +9,7 @@ import numpy as np
 
 from rigid_gym import quaternion
 from rigid_gym.recordable import Marker
+from rigid_gym.render import DYNAMIC_PALETTE
 from rigid_gym.shapes import Box
 
 from .base import RigidGymEnv
@@ -38,6 +39,11 @@ TILTED = np.deg2rad(5.0)
 """rad: a cube whose face nearest to up is tilted more than this is being rolled."""
 MARKER_PLACE = (-0.2, 0.2, 0.06)
 """m: where rgb_array frames draw the target orientation (a ghost cube, the back left)."""
+FACE_COLORS = ((0.84, 0.24, 0.22), (0.30, 0.66, 0.30), (0.92, 0.78, 0.25), (0.58, 0.42, 0.76),
+               DYNAMIC_PALETTE[0], DYNAMIC_PALETTE[1])
+"""The cube's faces in frames, towards its +x, -x, +y, -y, +z, -z: red, green, yellow,
+purple, and the blue and orange of the other tasks' cubes on top and bottom at the start, so
+that its orientation shows in pixels (as panda-gym's coloured cube's)."""
 ROLLS = {"+x": ((0, 1, 0), 1.0), "-x": ((0, 1, 0), -1.0),
          "+y": ((1, 0, 0), -1.0), "-y": ((1, 0, 0), 1.0)}
 """Push direction -> (world axis, sign of the quarter turn about it): a cube pushed at its top
@@ -138,6 +144,7 @@ class Flip(Task):
     goal_size = 4
     table_friction = TABLE_FRICTION
     markers_in_pixels = False
+    object_faces = FACE_COLORS
 
     def achieved_goal(self, vectors, state, worlds, cubes):
         # the World's own quaternion of the cube (its principal frame is its shape frame), the
@@ -163,7 +170,8 @@ class Flip(Task):
         h = float(half[0]) if len(half) else CUBE_HALF
         norm = np.linalg.norm(goal)
         orientation = tuple(goal / norm) if norm > 0 else (1.0, 0.0, 0.0, 0.0)
-        return [Marker(Box((h, h, h)), MARKER_PLACE, GOAL_COLOR, MARKER_ALPHA, orientation)]
+        return [Marker(Box((h, h, h)), MARKER_PLACE, GOAL_COLOR, MARKER_ALPHA, orientation,
+                       FACE_COLORS)]
 
     def shaped(self, vectors, held, achieved_goal, desired_goal, half):
         layout = self.observation_layout
@@ -228,9 +236,10 @@ class FlipEnv(RigidGymEnv):
     other than the top turned up (uniform), then turned about the vertical by an angle
     uniform in [0, 2 pi); every target is within 45 deg (d <= 0.146) of an orientation rolls
     reach. (panda-gym's targets are uniform over all rotations, some of them no resting
-    cube's.) Pad at (0, 0, 0.12) m, open. In ``pixels`` no target is drawn (the copies of a
-    batch share the marker's orientation); rgb_array frames draw it as a ghost cube at the
-    back left.
+    cube's.) Pad at (0, 0, 0.12) m, open. Frames draw the cube's faces in six colours
+    (``FACE_COLORS``: blue on top at the start, orange below), so that its orientation shows.
+    In ``pixels`` no target is drawn (the copies of a batch share a marker's orientation);
+    rgb_array frames draw it as a translucent cube of the same faces at the back left.
 
     ## Episode end
     Truncated after 50 steps (2 s) by ``gym.make``'s TimeLimit; terminated on success only

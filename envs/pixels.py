@@ -135,13 +135,16 @@ class CopyFrames:
     placed per copy.
 
     scene: the batch's Scene; task: its Task; half: the cubes' half edges (cubes,) m (the
-    markers' shapes follow them); num_worlds: B copies.
+    markers' shapes follow them); num_worlds: B copies; cubes: the cubes' body indices (drawn
+    with the task's ``object_faces``).
     """
 
-    def __init__(self, scene, task, half: np.ndarray, options: PixelOptions, num_worlds: int):
+    def __init__(self, scene, task, half: np.ndarray, options: PixelOptions, num_worlds: int,
+                 cubes: list[int]):
         self.task = task
         self.renderer = Renderer(scene, options.width, options.height,
-                                 camera=options.camera_for(type(task).__name__))
+                                 camera=options.camera_for(type(task).__name__),
+                                 face_colors=task.face_colors(cubes))
         drawn = options.goal_marker and task.markers_in_pixels
         markers = task.markers(np.zeros(task.goal_size), half) if drawn else []
         for m in markers:

@@ -65,6 +65,10 @@ class Task:
     """Coulomb coefficient of the task's objects (its cubes, or Slide's puck)."""
     table_friction: float = FRICTION
     """Coulomb coefficient of the table (a pair uses sqrt(mu_a mu_b))."""
+    object_faces: tuple | None = None
+    """Six (r, g, b): the colours in frames of an object's faces towards +x, -x, +y, -y, +z,
+    -z of its frame, for a task whose objects' orientation must be seen (Flip); None: each
+    object in one colour."""
     markers_in_pixels: bool = True
     """Whether ``pixels`` observations draw the goal markers (the copies of a batch share each
     marker's orientation, so a goal that is an orientation is not drawn there)."""
@@ -81,6 +85,10 @@ class Task:
         positions by default."""
         return self.observation_layout.entries([f"cube{k}.position"
                                                 for k in range(self.num_cubes)])
+
+    def face_colors(self, cubes: list[int]) -> dict:
+        """The Renderer's ``face_colors`` of the objects with body indices ``cubes``."""
+        return {} if self.object_faces is None else {c: self.object_faces for c in cubes}
 
     def achieved_goal(self, vectors: np.ndarray, state, worlds: np.ndarray,
                       cubes: list[int]) -> np.ndarray:

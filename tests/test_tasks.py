@@ -273,3 +273,18 @@ def test_a_finished_roll_pays_more_than_any_state_of_the_roll_before():
     after = shaped(quaternion.to_matrix(turn([0, 1, 0], 90.0)), (0.2, 0.2, 0.3))
     assert np.all(np.diff(approach) > 0) and np.all(np.diff(rolling) > 0)
     assert after > max(rolling) > max(approach) and 0.0 <= min(approach) and after < 1.0
+
+
+def test_flip_s_pixels_show_the_cube_s_orientation():
+    """A quarter turn about the vertical leaves a one-coloured cube's picture as it was; Flip's
+    faces (FACE_COLORS) change it. The top stays blue: the turn is about the vertical."""
+    env = make("rigid_gym/Flip-v0", obs_mode="pixels")
+    env.reset(seed=0)
+    cube = env.cubes[0]
+    before = env.core.observe(slice(None)).observations["pixels"][0]
+    env.world.set_pose(cube, env.world.position[cube], turn([0, 0, 1], 90.0))
+    after = env.core.observe(slice(None)).observations["pixels"][0]
+    assert np.any(before != after)
+    env.world.set_pose(cube, env.world.position[cube], turn([0, 0, 1], 360.0))
+    np.testing.assert_array_equal(env.core.observe(slice(None)).observations["pixels"][0],
+                                  before)
