@@ -182,13 +182,10 @@ class Flip(Task):
         left = np.array([rolls[nearest_rotation(r), nearest_target(g)]
                          for r, g in zip(rotations, desired_goal)])
         angle = tilt(rotations)
-        stage = staged(closeness(pad - cube), angle > TILTED,
-                       np.minimum(angle / (np.pi / 4), 1.0)) / 3.0
+        stage = np.where(left > 0, staged(closeness(pad - cube), angle > TILTED,
+                                          np.minimum(angle / (np.pi / 4), 1.0)) / 3.0, 0.0)
         most = rolls.max()
         return (most - left + stage) / (most + 1.0)
-
-    def shaped_reward(self, pad, held, achieved_goal, desired_goal, half):
-        raise NotImplementedError("Flip's stages read the cube's position: Flip.shaped")
 
 
 def nearest_target(goal: np.ndarray) -> int:
@@ -228,8 +225,9 @@ class FlipEnv(RigidGymEnv):
     -d. shaped (for on-policy learners), in [0, 1]: with r the fewest rolls from the cube's
     nearest resting orientation to the one nearest the target (``roll_table``, at most R = 4),
     (R - r + s) / (R + 1), s a roll's stages: reach, 1 - tanh(5 d) of the pad's distance to
-    the cube, until the cube tilts (> 5 deg); then 2 + its tilt / 45 deg; divided by 3. A roll
-    done lowers r: each pays once it is finished, not while it is under way; 1 when reached.
+    the cube, until the cube tilts (> 5 deg); then 2 + its tilt / 45 deg; divided by 3; s = 0
+    once r = 0. A roll done lowers r: each pays once it is finished, not while it is under
+    way; at most R / (R + 1) = 0.8 until the goal is reached, 1 there.
 
     ## Starting state
     Cube at x, y uniform in [-0.1, 0.1] m, resting, unrotated. Target: one of the five faces

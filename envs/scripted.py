@@ -38,6 +38,8 @@ ALIGNED = 0.006
 G = 9.81
 STRIKE_GAP = 0.005
 """m between the pad and the puck before Slide's strike."""
+STAGING = 0.02
+"""m back along the line from Slide's strike position where the pad descends."""
 FLIP_PUSH_DEPTH = 0.005
 """m: Flip's pad pushes with its bottom this far below the cube's top (the top of a face)."""
 FLIP_PUSH_SPEED = 0.3
@@ -206,12 +208,21 @@ def _slide(layout: Layout, observation: dict) -> np.ndarray:
     # at the contact, which a face would keep to x or y whatever the line
     corner = np.append(np.where(direction[:2] >= 0.0, 1.0, -1.0) * PAD_HALF_EXTENTS[:2], 0.0)
     behind = puck - direction * (radius + STRIKE_GAP) - corner
-    if np.linalg.norm(pad[:2] - behind[:2]) > 2 * ALIGNED:
-        if pad[2] < 2 * puck[2] + PAD_HALF_HEIGHT + 0.01:
-            return _toward(pad, np.array([pad[0], pad[1], CRUISE_HEIGHT]))  # clear the puck
-        return _above(pad, behind, CRUISE_HEIGHT)
-    if pad[2] > puck[2] + 0.005:
-        return _toward(pad, behind)  # descend behind the puck
+    behind[2] = puck[2]
+    along = np.dot(pad[:2] - behind[:2], direction[:2])  # < 0: back from it on the line
+    across = np.linalg.norm(pad[:2] - behind[:2] - along * direction[:2])
+    on_line = across < 2 * ALIGNED and -STAGING - 2 * ALIGNED < along < ALIGNED
+    if not (on_line and pad[2] <= puck[2] + 0.005):
+        # descend STAGING back along the line: the arm's force limit takes the puck for its
+        # bounding box, which a pad's corner just behind a round puck overlaps on a diagonal
+        staging = behind - direction * STAGING
+        if np.linalg.norm(pad[:2] - staging[:2]) > 2 * ALIGNED:
+            if pad[2] < 2 * puck[2] + PAD_HALF_HEIGHT + 0.01:
+                return _toward(pad, np.array([pad[0], pad[1], CRUISE_HEIGHT]))  # clear it
+            return _above(pad, staging, CRUISE_HEIGHT)
+        return _toward(pad, staging)  # descend
+    if along < -ALIGNED:
+        return _toward(pad, behind)  # close up to the strike's gap, low
     # the puck moves with the pad for the rest of the strike step (v STEP_TIME - STRIKE_GAP),
     # then slides v^2 / (2 mu g): the speed v that adds up to the distance
     a, b, c = 1.0 / (2.0 * PUCK_FRICTION * G), STEP_TIME, -(distance + STRIKE_GAP)

@@ -38,6 +38,8 @@ GOAL_X = (0.35, 0.55)
 """m: the target's x range: panda-gym's [0.25, 0.55] less the part that a push reaches ..."""
 GOAL_Y = (-0.15, 0.15)
 """m: ... and its y range (panda-gym's)."""
+SLIDING = 0.02
+"""m/s: the shaped reward counts a puck faster than this as struck (sliding)."""
 PAD_REACH_X = Workspace().high[0] + PAD_HALF_EXTENTS[0]
 """m: the farthest x of the pad's face (0.27): a puck pushed there has its centre at 0.30 m, a
 threshold short of the nearest target, so every target needs a slide."""
@@ -84,10 +86,24 @@ class Slide(Task):
     def markers(self, goal, half):
         return [Marker(success_zone(), (goal[0], goal[1], 0.0), GOAL_COLOR, MARKER_ALPHA)]
 
+    def shaped(self, vectors, held, achieved_goal, desired_goal, half):
+        layout = self.observation_layout
+        sliding = distance(vectors[:, layout.slice("cube0.velocity")]) > SLIDING
+        return self.stages(vectors[:, layout.slice("pad.position")], sliding, achieved_goal,
+                           desired_goal, half)
+
     def shaped_reward(self, pad, held, achieved_goal, desired_goal, half):
+        """The stages of a puck at rest (``shaped`` reads whether it slides)."""
+        return self.stages(pad, np.zeros(len(pad), dtype=bool), achieved_goal, desired_goal,
+                           half)
+
+    def stages(self, pad, sliding, achieved_goal, desired_goal, half):
+        """The shaped reward (k,) of copies whose pad is at ``pad`` (k, 3) m and whose puck
+        slides where ``sliding`` (k,) bool: reach the push point, then (the pad at it, the
+        puck sliding, or the puck beyond the pad's reach) the puck's closeness to the target."""
         radius = PUCK_RADIUS * half[:, 0]
         point = push_point(achieved_goal, desired_goal, radius)
-        struck = achieved_goal[:, 0] > PAD_REACH_X + radius  # only a slide gets it there
+        struck = sliding | (achieved_goal[:, 0] > PAD_REACH_X + radius)
         return staged(closeness(pad - point), (distance(pad - point) < PUSHING) | struck,
                       closeness(achieved_goal - desired_goal)) / 3.0
 
@@ -123,10 +139,9 @@ class SlideEnv(RigidGymEnv):
     of the target, else -1. dense: minus the distance, m. ``compute_reward`` takes batches.
     shaped (for on-policy learners; staged as ManiSkill's dense rewards), in [0, 1]: reach,
     1 - tanh(5 d) of the pad's distance d to the push point (behind the puck, away from the
-    target), until the pad is within 0.03 m of it or the puck has slid past the pad's reach
-    (x > 0.30 m); then 2 + (1 - tanh(5 d)) of the puck's distance d to the target; divided by
-    3; 1 when the goal is reached. (A puck sliding inside the pad's reach, the pad left behind,
-    scores the reach stage.)
+    target), until the pad is within 0.03 m of it, or the puck slides (faster than 0.02 m/s),
+    or it lies past the pad's reach (x > 0.30 m); then 2 + (1 - tanh(5 d)) of the puck's
+    distance d to the target; divided by 3; 1 when the goal is reached.
 
     ## Starting state
     Puck at x, y uniform in [-0.15, 0.15] m, resting on the table; target x uniform in

@@ -288,3 +288,57 @@ def test_flip_s_pixels_show_the_cube_s_orientation():
     env.world.set_pose(cube, env.world.position[cube], turn([0, 0, 1], 360.0))
     np.testing.assert_array_equal(env.core.observe(slice(None)).observations["pixels"][0],
                                   before)
+
+
+# -- shaped rewards ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("env_id, carried", [("rigid_gym/Reach-v0", 0.0),
+                                             ("rigid_gym/PickAndPlace-v0", 2 / 3),
+                                             ("rigid_gym/Slide-v0", 2 / 3),
+                                             ("rigid_gym/Flip-v0", 3 / 5)])
+def test_a_scripted_shaped_episode_stays_in_0_1_passes_its_stages_and_ends_at_one(env_id,
+                                                                                  carried):
+    env = gym.make(env_id, reward_type="shaped")
+    policy = scripted_policy(env)
+    rewards = []
+    for seed in range(3):
+        obs, _ = env.reset(seed=seed)
+        episode = []
+        for _ in range(50):
+            obs, reward, _, _, info = env.step(policy(obs))
+            episode.append(reward)
+        first = episode.index(1.0)  # 1 from the first step at the goal
+        assert info["is_success"] and episode[-1] == 1.0
+        assert first == 0 or max(episode[:first]) > carried
+        rewards += episode
+    assert all(0.0 <= r <= 1.0 for r in rewards)
+
+
+def test_a_sliding_puck_scores_the_slide_stage_and_a_still_one_the_reach_stage():
+    env = make("rigid_gym/Slide-v0", reward_type="shaped")
+    env.reset(seed=0)
+    env.world.set_pose(env.gripper.body, (-0.2, 0.2, 0.25))  # far from the push point
+    still = env.step(np.zeros(3))[1]
+    env.world.set_velocity(env.cubes[0], (0.3, 0.0, 0.0))
+    sliding = env.step(np.zeros(3))[1]
+    assert still < 1 / 3 < 2 / 3 < sliding < 1.0
+
+
+def test_shaped_rewards_are_bounded_for_any_state():
+    rng = np.random.default_rng(0)
+    k = 2000
+    half = np.full((k, 1), CUBE_HALF)
+    held = rng.integers(-1, 1, k)
+    for task in (Reach(), PickAndPlace(), Slide(), Flip()):
+        vectors = rng.uniform(-0.5, 0.8, (k, task.observation_layout.size))
+        if task.goal_size == 4:  # Flip: orientations as the observation holds them
+            q = quaternion.normalize(rng.normal(size=(k, 4)))
+            r = quaternion.to_matrix(q)
+            vectors[:, task.observation_layout.slice("cube0.orientation")] = np.concatenate(
+                [r[:, :, 0], r[:, :, 1]], axis=1)
+            achieved, desired = q, quaternion.normalize(rng.normal(size=(k, 4)))
+        else:
+            achieved, desired = rng.uniform(-0.5, 0.8, (2, k, 3))
+        reward = task.shaped(vectors, held, achieved, desired, half)
+        assert reward.shape == (k,) and np.isfinite(reward).all()
+        assert (reward >= 0.0).all() and (reward < 1.0).all(), type(task).__name__
