@@ -33,8 +33,9 @@ pad's 0.25 m reach leaves room for the three the farthest targets need)."""
 TABLE_FRICTION = 2.0
 """The table's Coulomb coefficient (a rubber mat): with the cube's 0.5 the pair's is 1.0. A
 cube of half edge a pushed at height h tips over its far edge before it slides when
-mu > a / h; the pad pushes the top 0.005-0.01 m of a face (h >= 0.035 m, a / h <= 0.57),
-so the cube rolls over where a table of 0.5 (pair 0.5) lets it slide."""
+mu > a / h; a pad whose bottom is 5 mm below the cube's top pushes at h = 0.0375 m
+(a / h = 0.53), so the cube rolls over where a table of 0.5 (pair 0.5) lets it slide
+(tests/test_tasks.py)."""
 TILTED = np.deg2rad(5.0)
 """rad: a cube whose face nearest to up is tilted more than this is being rolled."""
 MARKER_PLACE = (-0.2, 0.2, 0.06)
