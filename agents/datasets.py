@@ -69,9 +69,15 @@ class Recipe:
     seed: int
 
 
+RECIPE_TASKS = ["Push", "Stack", "Throw"]
+RECIPE_TASKS += ["Reach", "PickAndPlace", "Slide", "Flip"]
+"""The tasks with shipped datasets; task t's recipes draw from seeds RECIPE_SEED +
+100_000 x (3 t + k), so a task added at the end changes no other task's data."""
+
+
 def _recipes() -> tuple[Recipe, ...]:
     recipes = []
-    for t, task in enumerate(("Push", "Stack", "Throw")):
+    for t, task in enumerate(RECIPE_TASKS):
         for k, (name, policy, noise) in enumerate((("expert", "scripted", 0.0),
                                                    ("noisy", "scripted", RECIPE_NOISE),
                                                    ("random", "random", 0.0))):
@@ -81,7 +87,7 @@ def _recipes() -> tuple[Recipe, ...]:
 
 
 RECIPES = _recipes()
-"""The shipped datasets: for push, stack and throw, ``expert-v0`` (the scripted policy),
+"""The shipped datasets: for each of RECIPE_TASKS (push, stack, throw, ...), ``expert-v0`` (the scripted policy),
 ``noisy-v0`` (it with ``RECIPE_NOISE``) and ``random-v0`` (uniform random actions)."""
 RECIPE_EPISODES = 200
 """Episodes per shipped dataset (``rigid-gym dataset --recipes``)."""

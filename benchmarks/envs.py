@@ -4,8 +4,10 @@
    task's sparse id: success rate at the episode's end, mean return, mean episode wall time.
 2. Env steps per second through ``gym.make`` in one process (uniform random actions from a
    seeded generator, resets included), the median of ``--repeats`` timings of ``--steps``
-   steps each after a warm-up; panda-gym's PandaPush-v3 timed the same way in the same run
-   when it is installed (``pip install panda-gym``), and our rate as a ratio to it.
+   steps each after a warm-up; each task's panda-gym counterpart (``COUNTERPARTS``: PandaPush-v3
+   for Push, Stack and Throw, PandaReach-v3, PandaPickAndPlace-v3, PandaSlide-v3 and
+   PandaFlip-v3 for theirs) timed the same way in the same run when panda-gym is installed
+   (``pip install panda-gym``), and our rate as a ratio to it.
 3. ``render_mode="rgb_array"`` frame time (480 x 480), the median over 20 frames of an
    episode, after the first frame (which builds the renderer); and a picture of every task at
    the start and at the end of a scripted episode (seed 1), written to ``--frames`` (default
@@ -28,7 +30,16 @@ from rigid_gym.envs.scripted import scripted_policy
 import rigid_gym  # noqa: F401  (registers the ids)
 
 TASKS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
+TASKS += ["rigid_gym/Reach-v0", "rigid_gym/PickAndPlace-v0", "rigid_gym/Slide-v0",
+          "rigid_gym/Flip-v0"]
 PANDA_PUSH = "PandaPush-v3"
+COUNTERPARTS = {"rigid_gym/Push-v0": PANDA_PUSH, "rigid_gym/Stack-v0": PANDA_PUSH,
+                "rigid_gym/Throw-v0": PANDA_PUSH}
+COUNTERPARTS.update({"rigid_gym/Reach-v0": "PandaReach-v3",
+                     "rigid_gym/PickAndPlace-v0": "PandaPickAndPlace-v3",
+                     "rigid_gym/Slide-v0": "PandaSlide-v3", "rigid_gym/Flip-v0": "PandaFlip-v3"})
+"""Each task's panda-gym env for the speed ratio (Stack's and Throw's have none of the same
+kind: PandaPush-v3, one cube, as before)."""
 
 
 def scripted_success(env_id: str, episodes: int) -> tuple[float, float, float]:
@@ -53,6 +64,8 @@ def scripted_success(env_id: str, episodes: int) -> tuple[float, float, float]:
 def random_stepper(env_id: str, steps: int):
     """A function () -> env steps/s of ``steps`` steps of a ``gym.make`` env with seeded
     uniform random actions, resetting where an episode ends; warmed up by 100 steps."""
+    if env_id == "PandaFlip-v3":
+        without_missing_textures()
     env = gym.make(env_id)
     rng = np.random.default_rng(0)
     env.reset(seed=0)
@@ -69,6 +82,29 @@ def random_stepper(env_id: str, steps: int):
 
     run(100)  # warm-up: first allocations and caches
     return functools.partial(run, steps)
+
+
+def without_missing_textures() -> None:
+    """panda-gym 3.0.7's wheel lacks the texture colored_cube.png (panda-gym #71), so
+    PandaFlip-v3 fails at construction ("Error loading texture"): leave out a box's texture
+    whose file is missing. A texture is a look, loaded once: no part of a step's cost."""
+    import os
+
+    import panda_gym.assets
+    from panda_gym.pybullet import PyBullet
+
+    original = PyBullet.create_box
+    if getattr(original, "drops_missing_textures", False):
+        return
+
+    def create_box(self, *args, texture=None, **kwargs):
+        if texture is not None and not os.path.exists(
+                os.path.join(panda_gym.assets.get_data_path(), texture)):
+            texture = None
+        return original(self, *args, texture=texture, **kwargs)
+
+    create_box.drops_missing_textures = True
+    PyBullet.create_box = create_box
 
 
 def rates_in_rounds(runs: dict, repeats: int) -> dict:
@@ -90,7 +126,8 @@ def step_rates(env_ids: list[str], steps: int, repeats: int) -> dict[str, list[f
 
 
 def rate_and_ratio(rates: list[float], panda: list[float] | None) -> tuple[float, str]:
-    """The median rate, and the median over rounds of rate / PandaPush's (or why none)."""
+    """The median rate, and the median over rounds of rate / the counterpart's (or why
+    none)."""
     if panda is None:
         return statistics.median(rates), "panda-gym not installed"
     return statistics.median(rates), f"{statistics.median(r / p for r, p in zip(rates, panda)):.2f}x"
@@ -142,19 +179,21 @@ def panda_available() -> bool:
 
 
 def print_speed_table(steps: int, repeats: int) -> None:
-    """Env steps/s of every task and of PandaPush-v3 (when installed), timed in turn in each
-    of ``repeats`` rounds of ``steps`` steps; ratios are the medians of the rounds'."""
+    """Env steps/s of every task and of its panda-gym counterpart (``COUNTERPARTS``, when
+    installed), timed in turn in each of ``repeats`` rounds of ``steps`` steps; ratios are the
+    medians of the rounds'."""
     print(f"\nEnv steps/s, gym.make, one env, random actions, resets included (median of "
           f"{repeats} rounds of {steps} steps, every env timed in turn in each round)\n")
-    rates = step_rates(TASKS + ([PANDA_PUSH] if panda_available() else []), steps, repeats)
-    panda = rates.get(PANDA_PUSH)
-    print(f"| env | steps/s | ours/{PANDA_PUSH} |")
-    print("|---|---|---|")
+    pandas = sorted(set(COUNTERPARTS.values())) if panda_available() else []
+    rates = step_rates(TASKS + pandas, steps, repeats)
+    print("| env | steps/s | panda-gym counterpart | ours / counterpart |")
+    print("|---|---|---|---|")
     for env_id in TASKS:
-        rate, ratio = rate_and_ratio(rates[env_id], panda)
-        print(f"| {env_id} | {rate:,.0f} | {ratio} |")
-    if panda:
-        print(f"| {PANDA_PUSH} (panda-gym, PyBullet) | {statistics.median(panda):,.0f} | 1.00x |")
+        counterpart = COUNTERPARTS[env_id]
+        rate, ratio = rate_and_ratio(rates[env_id], rates.get(counterpart))
+        print(f"| {env_id} | {rate:,.0f} | {counterpart} | {ratio} |")
+    for panda in pandas:
+        print(f"| {panda} (panda-gym, PyBullet) | {statistics.median(rates[panda]):,.0f} | | |")
 
 
 def main():

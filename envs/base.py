@@ -198,9 +198,11 @@ class RigidGymEnv(gym.Env):
 
         if self.renderer is None:
             eye, target, fov = self.camera_view
-            self.renderer = Renderer(self.scene, camera=Camera(eye, target, fov_deg=fov))
+            self.renderer = Renderer(self.scene, camera=Camera(eye, target, fov_deg=fov),
+                                     face_colors=self.task.face_colors(self.cubes))
             for m in self.markers():
-                self.renderer.add_marker(m.shape, m.position, m.color, m.alpha, m.orientation)
+                self.renderer.add_marker(m.shape, m.position, m.color, m.alpha, m.orientation,
+                                         m.face_colors)
         return self.renderer.render(self.world.position, self.world.orientation)
 
 

@@ -24,7 +24,6 @@ from rigid_gym._core import gather_observations
 
 from rigid_gym.config import SolverConfig
 from rigid_gym.scene import Scene
-from rigid_gym.shapes import Box
 from rigid_gym.world import World
 
 from .effector import SuctionGripper, Workspace
@@ -95,13 +94,10 @@ class TaskBatch:
         self.table = self.gripper_body = -1
         self.frames: CopyFrames | None = None  # the copies' pixels, when observed
         # how observe reads the World's state (made with the World from the task's layout:
-        # gather_index), and where the achieved goal (the cubes' positions) and the holding
-        # flag lie in an observation
+        # gather_index), and where the holding flag lies in an observation
         layout = task.observation_layout
         empty = np.zeros(0, dtype=np.int64)
         self.gather, self.minus = empty, empty
-        self.achieved_columns = layout.entries([f"cube{k}.position"
-                                                for k in range(task.num_cubes)])
         self.holding = layout.slice("holding") if task.has_grip else None
         self.all_worlds = np.arange(b, dtype=np.int64)
 
@@ -115,9 +111,11 @@ class TaskBatch:
         range: > 0 puts the collision phase into the World's config for every episode."""
         restitution = self.options.randomization.get("restitution", (0.0, 0.0))[1]
         scene = Scene()
-        self.table = scene.add_ground(friction=FRICTION, name="table")
-        self.cubes = [scene.add_body(Box((h, h, h)), mass=CUBE_MASS, position=(0.0, 0.0, h),
-                                     friction=FRICTION, restitution=restitution, name=f"cube{k}")
+        task = self.task
+        self.table = scene.add_ground(friction=task.table_friction, name="table")
+        self.cubes = [scene.add_body(task.object_shape(h), mass=CUBE_MASS,
+                                     position=(0.0, 0.0, h), friction=task.object_friction,
+                                     restitution=restitution, name=f"cube{k}")
                       for k, h in enumerate(half.tolist())]
         self.gripper_body = scene.add_body(SuctionGripper.shape, kinematic=True,
                                            position=GRIPPER_START, friction=FRICTION,
@@ -129,13 +127,14 @@ class TaskBatch:
                            num_worlds=self.num_worlds if self.batched else None,
                            config=SolverConfig.for_scene(scene, **SOLVER_SETTINGS))
         self.gripper = SuctionGripper(self.world, self.gripper_body, self.cubes,
-                                      [(h, h, h) for h in half.tolist()], STEP_TIME, Workspace())
+                                      [task.object_extents(h) for h in half.tolist()], STEP_TIME,
+                                      Workspace())
         bodies = {PAD: self.gripper_body} | {f"cube{k}": c for k, c in enumerate(self.cubes)}
         self.gather, self.minus = gather_index(self.task.observation_layout, len(scene.bodies),
                                                bodies)
         if self.options.pixels.pixels:
             self.frames = CopyFrames(scene, self.task, half, self.options.pixels,
-                                     self.num_worlds)
+                                     self.num_worlds, self.cubes)
 
     def built(self) -> tuple[World, SuctionGripper]:
         """The World and its gripper, which the first reset builds."""
@@ -186,7 +185,8 @@ class TaskBatch:
         if factors:  # factors of 1 (restitution 0) for what is not randomised
             one = np.ones((len(rows), n + 2))
             mass = CUBE_MASS * factors.get("mass", one)
-            friction = FRICTION * factors.get("friction", one)
+            friction = factors.get("friction", one) * np.array(
+                [self.task.object_friction] * n + [FRICTION, self.task.table_friction])
             restitution = factors.get("restitution", np.zeros_like(one))
         targets = [(None, ALL)] if copies is ALL else list(zip(rows.tolist(), range(len(rows))))
         for world, k in targets:
@@ -235,8 +235,8 @@ class TaskBatch:
             vectors[:, self.holding] = (gripper.held[copies] >= 0)[:, None]
         if not finite:  # a solver failure: say so here, not in a network
             self.refuse_non_finite(vectors, worlds)
-        achieved = vectors[:, self.achieved_columns].astype(np.float32)
-        pad = vectors[:, :3].copy()  # the true pad position (before any observation noise)
+        achieved = self.task.achieved_goal(vectors, s, worlds, self.cubes).astype(np.float32)
+        clean = vectors  # the true state (noise makes a new array)
         noise = self.options.observation_noise
         if noise > 0.0:
             rngs = [self.rngs[i] for i in worlds.tolist()]
@@ -250,8 +250,8 @@ class TaskBatch:
         elif self.options.reward_type == "shaped":
             held = gripper.held[copies] if self.task.has_grip \
                 else np.full(len(worlds), -1, dtype=np.int64)
-            rewards = np.where(successes, 1.0, self.task.shaped_reward(
-                pad, held, achieved64, desired64, self.half[copies]))
+            rewards = np.where(successes, 1.0, self.task.shaped(
+                clean, held, achieved64, desired64, self.half[copies]))
         else:
             rewards = self.task.reward(achieved64, desired64, "dense")
         observations = {"observation": vectors.astype(np.float32), "achieved_goal": achieved,

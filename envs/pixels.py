@@ -42,6 +42,12 @@ and a little), up to a stack's and a lifted cube's height; for Throw, also every
 bin (x up to 0.65 m plus its half width, y in [-0.24, 0.24] m). The pad is in view wherever it
 works on a cube."""
 VIEWED["Stack"] = VIEWED["Push"]
+VIEWED.update(Reach=((-0.18, -0.18, 0.0), (0.18, 0.18, 0.3)),
+              PickAndPlace=((-0.18, -0.18, 0.0), (0.18, 0.18, 0.25)),
+              Slide=((-0.18, -0.18, 0.0), (0.6, 0.2, 0.04)),
+              Flip=((-0.22, -0.22, 0.0), (0.22, 0.22, 0.06)))
+"""Reach's: every target; PickAndPlace's: the cube and every target, in the air too; Slide's:
+the puck's starts and every target; Flip's: where rolls can take the cube."""
 CAMERAS = {
     "Push": {
         "front": Camera(eye=(0.45, -0.6, 0.5), target=(0.0, 0.0, 0.04), fov_deg=36.0),
@@ -60,6 +66,14 @@ CAMERAS = {
 VIEWED box: "front" from the front right above (the default), "top" straight down (+x to the
 right, +y up the picture), "side" from -y, low, for heights."""
 CAMERAS["Stack"] = CAMERAS["Push"]
+CAMERAS["Reach"] = {
+    "front": Camera(eye=(0.5, -0.7, 0.6), target=(0.0, 0.0, 0.1), fov_deg=40.0),
+    "top": Camera(eye=(0.0, 0.0, 1.2), target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0), fov_deg=26.0),
+    "side": Camera(eye=(0.0, -0.9, 0.15), target=(0.0, 0.0, 0.14), fov_deg=36.0),
+}
+"""Reach's, PickAndPlace's and Flip's cameras: Push's workspace up to 0.3 m (targets in the
+air), and out to +-0.22 m (where rolls take Flip's cube)."""
+CAMERAS.update(PickAndPlace=CAMERAS["Reach"], Flip=CAMERAS["Reach"], Slide=CAMERAS["Throw"])
 CAMERA_NAMES = tuple(CAMERAS["Push"])
 
 
@@ -121,14 +135,18 @@ class CopyFrames:
     placed per copy.
 
     scene: the batch's Scene; task: its Task; half: the cubes' half edges (cubes,) m (the
-    markers' shapes follow them); num_worlds: B copies.
+    markers' shapes follow them); num_worlds: B copies; cubes: the cubes' body indices (drawn
+    with the task's ``object_faces``).
     """
 
-    def __init__(self, scene, task, half: np.ndarray, options: PixelOptions, num_worlds: int):
+    def __init__(self, scene, task, half: np.ndarray, options: PixelOptions, num_worlds: int,
+                 cubes: list[int]):
         self.task = task
         self.renderer = Renderer(scene, options.width, options.height,
-                                 camera=options.camera_for(type(task).__name__))
-        markers = task.markers(np.zeros(task.goal_size), half) if options.goal_marker else []
+                                 camera=options.camera_for(type(task).__name__),
+                                 face_colors=task.face_colors(cubes))
+        drawn = options.goal_marker and task.markers_in_pixels
+        markers = task.markers(np.zeros(task.goal_size), half) if drawn else []
         for m in markers:
             self.renderer.add_marker(m.shape, m.position, m.color, m.alpha, m.orientation)
         self.marker_position = np.zeros((num_worlds, len(markers), 3))

@@ -16,7 +16,18 @@ import numpy as np
 
 from .base import RigidGymEnv
 from .effector import PAD_HALF_EXTENTS, STEP_DISTANCE
+from .flip import (
+    PUSH_DIRECTIONS,
+    ROLLS,
+    TILTED,
+    nearest_rotation,
+    nearest_target,
+    roll_table,
+    rotation_matrices,
+    tilt,
+)
 from .observation import Layout
+from .slide import PUCK_FRICTION, PUCK_RADIUS
 from .task import CUBE_HALF, FRICTION, STEP_TIME
 
 PAD_HALF_HEIGHT = PAD_HALF_EXTENTS[2]
@@ -25,6 +36,16 @@ CRUISE_HEIGHT = 0.12
 ALIGNED = 0.006
 """m: x, y error under which the pad counts as above (or behind) its mark."""
 G = 9.81
+STRIKE_GAP = 0.005
+"""m between the pad and the puck before Slide's strike."""
+STAGING = 0.02
+"""m back along the line from Slide's strike position where the pad descends."""
+FLIP_PUSH_DEPTH = 0.005
+"""m: Flip's pad pushes with its bottom this far below the cube's top (the top of a face)."""
+FLIP_PUSH_SPEED = 0.3
+"""Flip's push, in action units (0.015 m per step)."""
+FLIP_ROLL_SHIFT = 0.06
+"""m a roll moves the cube, about (for choosing rolls that keep it in the middle)."""
 
 
 def scripted_policy(env):
@@ -32,7 +53,9 @@ def scripted_policy(env):
     task = env.unwrapped
     if not isinstance(task, RigidGymEnv):
         raise ValueError(f"scripted_policy: expected a rigid_gym env, got {type(task).__name__}")
-    policy = {"PushEnv": _push, "StackEnv": _stack, "ThrowEnv": _throw}[type(task).__name__]
+    policy = {"PushEnv": _push, "StackEnv": _stack, "ThrowEnv": _throw,
+              "ReachEnv": _reach, "PickAndPlaceEnv": _pick_and_place, "SlideEnv": _slide,
+              "FlipEnv": _flip}[type(task).__name__]
     return functools.partial(policy, task.task.observation_layout)
 
 
@@ -142,3 +165,109 @@ def _launch_velocity(start: np.ndarray, goal: np.ndarray, vertical: float = 1.25
     drop = start[2] - goal[2]
     time = (vertical + np.sqrt(vertical ** 2 + 2 * G * drop)) / G
     return np.array([(goal[0] - start[0]) / time, (goal[1] - start[1]) / time, vertical])
+
+
+def _reach(layout: Layout, observation: dict) -> np.ndarray:
+    """Move the pad straight to the target."""
+    pad = _field(layout, observation, "pad.position")
+    return _toward(pad, observation["desired_goal"].astype(np.float64))
+
+
+def _pick_and_place(layout: Layout, observation: dict) -> np.ndarray:
+    """Pick the cube up; put it down at a target on the table, or hold it at one in the air."""
+    pad, held = _field(layout, observation, "pad.position"), _held(layout, observation)
+    cube = _field(layout, observation, "cube0.position")
+    target = observation["desired_goal"].astype(np.float64)
+    on_table = target[2] < CUBE_HALF + 0.005
+    if not held:
+        if np.linalg.norm(cube - target) < 0.01:  # put down: stay clear
+            return np.array([0.0, 0.0, 1.0, -1.0])
+        return _carry(pad, cube, target, False)
+    if on_table:
+        return _carry(pad, cube, target, True)
+    if cube[2] < CUBE_HALF + 0.02 and np.linalg.norm(cube[:2] - target[:2]) > ALIGNED:
+        return np.array([0.0, 0.0, 1.0, 1.0])  # lift clear of the table first
+    return np.append(_toward(pad, target + pad - cube), 1.0)  # then hold it at the target
+
+
+def _slide(layout: Layout, observation: dict) -> np.ndarray:
+    """Get behind the puck on the line from the target through it, then strike it in one step
+    at the speed from which friction stops it at the target, and stand still."""
+    pad = _field(layout, observation, "pad.position")
+    puck = _field(layout, observation, "cube0.position")
+    if np.linalg.norm(_field(layout, observation, "cube0.velocity")) > 0.02:
+        return np.zeros(3)  # sliding: keep out of its way
+    goal = observation["desired_goal"].astype(np.float64)
+    line = goal[:2] - puck[:2]
+    distance = np.linalg.norm(line)
+    if distance < 0.01:
+        return np.zeros(3)
+    direction = np.append(line / distance, 0.0)
+    radius = PUCK_RADIUS * puck[2]  # the puck's centre height is its half height
+    # strike with the pad's vertical edge on the line: a round puck is pushed along the normal
+    # at the contact, which a face would keep to x or y whatever the line
+    corner = np.append(np.where(direction[:2] >= 0.0, 1.0, -1.0) * PAD_HALF_EXTENTS[:2], 0.0)
+    behind = puck - direction * (radius + STRIKE_GAP) - corner
+    behind[2] = puck[2]
+    along = np.dot(pad[:2] - behind[:2], direction[:2])  # < 0: back from it on the line
+    across = np.linalg.norm(pad[:2] - behind[:2] - along * direction[:2])
+    on_line = across < 2 * ALIGNED and -STAGING - 2 * ALIGNED < along < ALIGNED
+    if not (on_line and pad[2] <= puck[2] + 0.005):
+        # descend STAGING back along the line: the arm's force limit takes the puck for its
+        # bounding box, which a pad's corner just behind a round puck overlaps on a diagonal
+        staging = behind - direction * STAGING
+        if np.linalg.norm(pad[:2] - staging[:2]) > 2 * ALIGNED:
+            if pad[2] < 2 * puck[2] + PAD_HALF_HEIGHT + 0.01:
+                return _toward(pad, np.array([pad[0], pad[1], CRUISE_HEIGHT]))  # clear it
+            return _above(pad, staging, CRUISE_HEIGHT)
+        return _toward(pad, staging)  # descend
+    if along < -ALIGNED:
+        return _toward(pad, behind)  # close up to the strike's gap, low
+    # the puck moves with the pad for the rest of the strike step (v STEP_TIME - STRIKE_GAP),
+    # then slides v^2 / (2 mu g): the speed v that adds up to the distance
+    a, b, c = 1.0 / (2.0 * PUCK_FRICTION * G), STEP_TIME, -(distance + STRIKE_GAP)
+    speed = (-b + np.sqrt(b * b - 4.0 * a * c)) / (2.0 * a)
+    return np.clip(direction * speed * STEP_TIME / STEP_DISTANCE, -1.0, 1.0)
+
+
+def _flip(layout: Layout, observation: dict) -> np.ndarray:
+    """Roll the cube a quarter turn at a time (pushed at the top of a face it tips over its far
+    edge), along a fewest-rolls path to the resting orientation nearest the target, choosing
+    among equally short paths the roll that keeps the cube nearest the middle."""
+    pad = _field(layout, observation, "pad.position")
+    if _held(layout, observation):
+        return np.array([0.0, 0.0, 1.0, -1.0])
+    cube = _field(layout, observation, "cube0.position")
+    rotation = rotation_matrices(_field(layout, observation, "cube0.orientation")[None])[0]
+    angle = tilt(rotation[None])[0]
+    half = CUBE_HALF
+    push_height = 2 * half + PAD_HALF_HEIGHT - FLIP_PUSH_DEPTH
+    if angle > TILTED:  # mid-roll: push on while it leans away from the pad, then let it fall
+        up = rotation[:, np.argmax(np.abs(rotation[2]))]
+        lean = np.sign(up[2]) * up[:2]
+        ahead = np.dot(cube[:2] - pad[:2], lean) > 0 and pad[2] < 2 * half + PAD_HALF_HEIGHT
+        if ahead and angle < np.deg2rad(35.0):
+            step = np.zeros(3)
+            step[np.argmax(np.abs(lean))] = np.sign(lean[np.argmax(np.abs(lean))])
+            return np.append(step * FLIP_PUSH_SPEED, -1.0)
+        return np.zeros(4)
+    after, rolls = roll_table()
+    current = nearest_rotation(rotation)
+    target = nearest_target(observation["desired_goal"].astype(np.float64))
+    left = rolls[current, target]
+    if left == 0:
+        return np.array([0.0, 0.0, 1.0, -1.0])  # done: rise out of the way
+    moves = [k for k in range(len(after[current])) if rolls[after[current, k], target] < left]
+    directions = [np.array(PUSH_DIRECTIONS[d]) for d in ROLLS]
+    move = min(moves, key=lambda k: np.linalg.norm(cube[:2] + FLIP_ROLL_SHIFT * directions[k]))
+    direction = np.append(directions[move], 0.0)
+    behind = cube - direction * (half + PAD_HALF_EXTENTS[0] + 0.008)
+    behind[2] = push_height
+    clear = 2 * half + PAD_HALF_HEIGHT + 0.02
+    if np.linalg.norm(pad[:2] - behind[:2]) > 2 * ALIGNED:
+        if pad[2] < clear - 0.005:
+            return np.array([0.0, 0.0, 1.0, -1.0])  # clear the cube
+        return np.append(_above(pad, behind, clear), -1.0)
+    if pad[2] > push_height + 0.003:
+        return np.append(_toward(pad, behind), -1.0)  # descend behind the cube
+    return np.append(direction * FLIP_PUSH_SPEED, -1.0)

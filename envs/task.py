@@ -18,6 +18,7 @@ import numpy as np
 
 from rigid_gym.recordable import Marker
 from rigid_gym.scene import Scene
+from rigid_gym.shapes import Box
 
 from .observation import Layout, observation_layout
 
@@ -60,12 +61,51 @@ class Task:
     """(eye (m), target (m), vertical field of view (deg)) of the rgb_array camera: the
     workspace from the front right, above."""
     num_fixtures: int = 0
+    object_friction: float = FRICTION
+    """Coulomb coefficient of the task's objects (its cubes, or Slide's puck)."""
+    table_friction: float = FRICTION
+    """Coulomb coefficient of the table (a pair uses sqrt(mu_a mu_b))."""
+    object_faces: tuple | None = None
+    """Six (r, g, b): the colours in frames of an object's faces towards +x, -x, +y, -y, +z,
+    -z of its frame, for a task whose objects' orientation must be seen (Flip); None: each
+    object in one colour."""
+    markers_in_pixels: bool = True
+    """Whether ``pixels`` observations draw the goal markers (the copies of a batch share each
+    marker's orientation, so a goal that is an orientation is not drawn there)."""
 
     @functools.cached_property
     def observation_layout(self) -> Layout:
         """The fields of this task's ``observation`` vector, in order
         (``rigid_gym.envs.observation``)."""
         return observation_layout(self.num_cubes, self.has_grip)
+
+    @functools.cached_property
+    def achieved_columns(self) -> np.ndarray:
+        """The entries of the ``observation`` vector that make the achieved goal: the cubes'
+        positions by default."""
+        return self.observation_layout.entries([f"cube{k}.position"
+                                                for k in range(self.num_cubes)])
+
+    def face_colors(self, cubes: list[int]) -> dict:
+        """The Renderer's ``face_colors`` of the objects with body indices ``cubes``."""
+        return {} if self.object_faces is None else {c: self.object_faces for c in cubes}
+
+    def achieved_goal(self, vectors: np.ndarray, state, worlds: np.ndarray,
+                      cubes: list[int]) -> np.ndarray:
+        """The achieved goals (k, goal_size) float64 of copies ``worlds`` (k,) of the World
+        whose ``state`` (World.state) holds them, their observation vectors (noise-free)
+        ``vectors`` (k, layout size), the cubes' body indices ``cubes``: the vectors'
+        ``achieved_columns`` unless a task reads the state."""
+        return vectors[:, self.achieved_columns]
+
+    def object_shape(self, half: float):
+        """The shape of an object of half edge (or half height) ``half`` m: a cube."""
+        return Box((half, half, half))
+
+    def object_extents(self, half: float) -> tuple[float, float, float]:
+        """Half extents (m) of the box that bounds ``object_shape(half)`` unrotated (what the
+        gripper's force limit and suction reach read)."""
+        return (half, half, half)
 
     def place_cubes(self, rngs: list, half: np.ndarray) -> np.ndarray:
         """Start positions (k, cubes, 3) m of the cubes with half edges ``half`` (k, cubes) m,
@@ -113,6 +153,15 @@ class Task:
         half edges ``half`` (k, cubes) m -> (k,) in [0, 1) (the env gives 1 where the goal is
         reached). Staged as ManiSkill's dense rewards: see ``staged``."""
         raise NotImplementedError
+
+    def shaped(self, vectors: np.ndarray, held: np.ndarray, achieved_goal: np.ndarray,
+               desired_goal: np.ndarray, half: np.ndarray) -> np.ndarray:
+        """The shaped reward of copies whose noise-free observation vectors are ``vectors``
+        (k, layout size): ``shaped_reward`` of the pad's position read from them. A task whose
+        stages read more of the state than the pad and the goals (Flip: the cube's position,
+        which its goal does not hold) overrides this."""
+        pad = vectors[:, self.observation_layout.slice("pad.position")]
+        return self.shaped_reward(pad, held, achieved_goal, desired_goal, half)
 
 
 SHAPED_SCALE = 5.0

@@ -27,8 +27,12 @@ from rigid_gym.checks import integer
 from . import TASKS
 from .base import RigidGymEnv, task_spaces
 from .core import ALL, TaskBatch
+from .flip import FlipEnv
 from .options import Options, checked_actions
+from .pick_and_place import PickAndPlaceEnv
 from .push import PushEnv
+from .reach import ReachEnv
+from .slide import SlideEnv
 from .stack import StackEnv
 from .task import CUBE_HALF
 from .throw import ThrowEnv
@@ -152,3 +156,7 @@ def vector_entry_point(env_class: type[RigidGymEnv], task: str):
 push = vector_entry_point(PushEnv, "Push")
 stack = vector_entry_point(StackEnv, "Stack")
 throw = vector_entry_point(ThrowEnv, "Throw")
+reach = vector_entry_point(ReachEnv, "Reach")
+pick_and_place = vector_entry_point(PickAndPlaceEnv, "PickAndPlace")
+slide = vector_entry_point(SlideEnv, "Slide")
+flip = vector_entry_point(FlipEnv, "Flip")

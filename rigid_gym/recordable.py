@@ -31,13 +31,16 @@ if TYPE_CHECKING:
 class Marker:
     """Geometry drawn that is not a body (a goal): ``shape`` (a solid shape) placed by its
     shape frame at ``position`` (3,) m with ``orientation`` (4,) unit quaternion (w, x, y, z),
-    in ``color`` (r, g, b) with opacity ``alpha`` in (0, 1]."""
+    in ``color`` (r, g, b) with opacity ``alpha`` in (0, 1]; ``face_colors``: None, or six
+    (r, g, b) for its faces towards +x, -x, +y, -y, +z, -z (an orientation to be seen; the
+    Renderer draws them, recordings the one ``color``)."""
 
     shape: object
     position: tuple
     color: tuple
     alpha: float = 1.0
     orientation: tuple = (1.0, 0.0, 0.0, 0.0)
+    face_colors: tuple | None = None
 
 
 @dataclass(frozen=True)

@@ -158,6 +158,9 @@ class Renderer:
     colors: optional {body index: (r, g, b) in [0, 1]} overriding the default palette (planes
         light wood, static bodies grey, kinematic bodies dark grey, dynamic bodies distinct
         colours from DYNAMIC_PALETTE).
+    face_colors: optional {body index: six (r, g, b)}: the colours of the body's triangles
+        facing +x, -x, +y, -y, +z, -z of its frame (by their normals' largest component), for
+        a body whose orientation must be seen (a die's faces); overrides ``colors``.
     light_direction: (3,) direction towards the light, world frame (normalised here).
     shadows: draw the bodies' shadows (on everything, planes included).
     plane_half_size: half the side of the square drawn for each Plane, m.
@@ -166,7 +169,7 @@ class Renderer:
     def __init__(self, scene: Scene, width: int = 480, height: int = 480,
                  camera: Camera | None = None, colors: dict | None = None,
                  light_direction=DEFAULT_LIGHT, shadows: bool = True,
-                 plane_half_size: float = 1.0):
+                 plane_half_size: float = 1.0, face_colors: dict | None = None):
         if not isinstance(scene, Scene):
             raise ValueError(
                 f"Renderer.scene: expected a rigid_gym.Scene, got {type(scene).__name__}")
@@ -181,6 +184,11 @@ class Renderer:
         colours = body_colors(scene, colors)
         half = positive(plane_half_size, "Renderer.plane_half_size")
         self._parts = [_body_part(b, colours[b.index], half) for b in scene.bodies]
+        for index, faces in (face_colors or {}).items():
+            body = _index(index, len(scene), "Renderer.face_colors key", "bodies")
+            part = self._parts[body]
+            tinted = by_face(part.corners, faces, f"Renderer.face_colors[{index}]")
+            self._parts[body] = _Part(part.corners, part.normals, tinted, part.alpha, part.kind)
         self._marker_rotation = np.zeros((0, 3, 3))  # (m, 3, 3) each marker's orientation
         self._marker_position = np.zeros((0, 3))  # (m, 3) m
         self.shadow_side = shadow_side(self.width, self.height) if shadows else 0
@@ -203,14 +211,15 @@ class Renderer:
     # -- markers -------------------------------------------------------------------------------
 
     def add_marker(self, shape, position=(0.0, 0.0, 0.0), color=MARKER_COLOR, alpha: float = 1.0,
-                   orientation=(1.0, 0.0, 0.0, 0.0)) -> int:
+                   orientation=(1.0, 0.0, 0.0, 0.0), face_colors=None) -> int:
         """Add extra geometry that is not a body (a goal, a target), drawn until the renderer
         is dropped. Returns its marker index.
 
         shape: Sphere, Box, Capsule, Mesh or Compound, placed by its shape frame at
             ``position`` (3,) m with ``orientation`` (4,) unit quaternion (w, x, y, z).
         color: (r, g, b) in [0, 1]; alpha in (0, 1]: below 1 it is blended over what lies
-            behind it (markers cast no shadows).
+            behind it (markers cast no shadows). face_colors: None, or six (r, g, b) for the
+            triangles facing +x, -x, +y, -y, +z, -z of the shape frame (as the Renderer's).
         """
         index = len(self._parts) - self.num_bodies
         where = f"Renderer.add_marker (marker {index})"
@@ -222,7 +231,9 @@ class Renderer:
         vertices, triangles = tessellate(shape)
         corners, normals = vertices[triangles].reshape(-1, 3), corner_normals(vertices, triangles)
         kind = _OPAQUE if alpha == 1.0 else _TRANSLUCENT
-        self._parts.append(_Part(corners, normals, np.tile(rgb, (len(triangles), 1)), alpha, kind))
+        colors = np.tile(rgb, (len(triangles), 1)) if face_colors is None else by_face(
+            corners, face_colors, f"{where}: face_colors")
+        self._parts.append(_Part(corners, normals, colors, alpha, kind))
         self._marker_rotation = np.concatenate([self._marker_rotation, np.eye(3)[None]])
         self._marker_position = np.concatenate([self._marker_position, np.zeros((1, 3))])
         self._pack()
@@ -341,6 +352,21 @@ def _body_part(body, rgb: np.ndarray, plane_half_size: float) -> _Part:
         colors[odd % 2 == 1] *= 0.94
         return _Part(corners, normals, colors, 1.0, _BACKGROUND)
     return _Part(corners, normals, colors, 1.0, _CASTER)
+
+
+def by_face(corners: np.ndarray, faces, where: str) -> np.ndarray:
+    """(T, 3) RGB of triangles with ``corners`` (3T, 3): ``faces`` (six (r, g, b), for the
+    directions +x, -x, +y, -y, +z, -z) chosen by each triangle's normal's largest component."""
+    rgb = np.array([_color(c, f"{where}[{k}]") for k, c in enumerate(faces)]) \
+        if len(faces) == 6 else None
+    if rgb is None:
+        raise ValueError(f"{where}: expected six (r, g, b), one per face direction "
+                         f"(+x, -x, +y, -y, +z, -z), got {len(faces)}")
+    triangles = corners.reshape(-1, 3, 3)
+    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    axis = np.argmax(np.abs(normals), axis=1)
+    negative = normals[np.arange(len(normals)), axis] < 0.0
+    return rgb[2 * axis + negative]
 
 
 def body_colors(scene: Scene, colors: dict | None = None) -> np.ndarray:

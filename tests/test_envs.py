@@ -18,6 +18,8 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 import rigid_gym
 
 TASK_IDS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
+TASK_IDS += ["rigid_gym/Reach-v0", "rigid_gym/PickAndPlace-v0", "rigid_gym/Slide-v0",
+             "rigid_gym/Flip-v0"]
 
 
 def make(env_id, **kwargs):
@@ -31,10 +33,11 @@ def without_a_display(monkeypatch):
 
 
 def test_every_id_is_registered_on_import():
-    assert rigid_gym.ENV_IDS == [
+    assert rigid_gym.ENV_IDS[:6] == [
         "rigid_gym/Push-v0", "rigid_gym/PushDense-v0", "rigid_gym/Stack-v0",
         "rigid_gym/StackDense-v0", "rigid_gym/Throw-v0", "rigid_gym/ThrowDense-v0"]
-    assert [gym.spec(i).max_episode_steps for i in rigid_gym.ENV_IDS] == [50, 50, 100, 100, 50, 50]
+    assert [gym.spec(i).max_episode_steps for i in rigid_gym.ENV_IDS[:6]] == [50, 50, 100, 100,
+                                                                           50, 50]
 
 
 @pytest.mark.parametrize("env_id", rigid_gym.ENV_IDS)
@@ -405,6 +408,10 @@ LAYOUTS = {
         f"cube0.{q}" for q in ("position", "offset", "orientation", "velocity",
                                "angular_velocity"))],
 }
+LAYOUTS.update({"rigid_gym/Reach-v0": ["pad.position", "pad.velocity"],
+                "rigid_gym/PickAndPlace-v0": LAYOUTS["rigid_gym/Throw-v0"],
+                "rigid_gym/Slide-v0": LAYOUTS["rigid_gym/Push-v0"],
+                "rigid_gym/Flip-v0": LAYOUTS["rigid_gym/Throw-v0"]})
 """Each task's observation fields in order: the committed models were trained on this order."""
 
 
@@ -444,8 +451,16 @@ def check_fields(env, obs):
     for k, cube in enumerate(env.cubes):
         columns = rotation_of(env.world.orientation[cube])[:, :2].T.ravel()
         np.testing.assert_allclose(fields[f"cube{k}.orientation"], columns, atol=1e-6)
-    cubes = np.concatenate([env.world.position[c] for c in env.cubes])
-    np.testing.assert_array_equal(obs["achieved_goal"], cubes.astype(np.float32))
+    if env.task.goal_size == 4:  # Flip: the cube's orientation, w >= 0
+        q = env.world.orientation[env.cubes[0]]
+        np.testing.assert_array_equal(obs["achieved_goal"], (q if q[0] >= 0 else -q).astype(
+            np.float32))
+    elif not env.cubes:  # Reach: the pad
+        np.testing.assert_array_equal(obs["achieved_goal"],
+                                      env.world.position[env.gripper.body].astype(np.float32))
+    else:
+        cubes = np.concatenate([env.world.position[c] for c in env.cubes])
+        np.testing.assert_array_equal(obs["achieved_goal"], cubes.astype(np.float32))
     np.testing.assert_array_equal(obs["desired_goal"], env.core.goals[0].astype(np.float32))
     return fields
 
@@ -474,7 +489,7 @@ def test_every_observation_field_is_the_world_state_it_names(env_id):
     for _ in range(gym.spec(env_id).max_episode_steps):
         obs = env.step(policy(obs))[0]
         held.append(check_fields(env, obs).get("holding", [0.0])[0])
-    if env.task.has_grip:
+    if env.task.has_grip and env_id != "rigid_gym/Flip-v0":  # Flip's policy rolls, not grips
         assert 0.0 in held and 1.0 in held  # the flag read both ways
     rng = np.random.default_rng(7)
     w = env.world

@@ -319,3 +319,22 @@ def add_marker(shape, **kwargs):
 def test_bad_input_is_rejected_naming_the_argument(make, message):
     with pytest.raises(ValueError, match=message):
         make()
+
+
+def test_face_colors_paint_each_face_by_its_direction_and_are_checked():
+    """Seen from straight above, a box with face colours shows its +z colour; turned upside
+    down (a half turn about x), its -z colour; six colours are required."""
+    faces = [(0.9, 0.1, 0.1), (0.1, 0.9, 0.1), (0.9, 0.9, 0.1), (0.6, 0.2, 0.8), BLUE, RED]
+    above = Camera(eye=(0.0, 0.0, 1.0), target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0))
+
+    def hue_at_centre(orientation):
+        scene = box_scene(orientation=orientation)
+        picture = draw(scene, camera=above, width=32, height=32, face_colors={0: faces})
+        pixel = picture[16, 16].astype(float)
+        return pixel / pixel.sum()
+
+    for orientation, rgb in ((IDENTITY, BLUE), ((0.0, 1.0, 0.0, 0.0), RED)):
+        np.testing.assert_allclose(hue_at_centre(orientation), np.array(rgb) / sum(rgb),
+                                   atol=0.02)
+    with pytest.raises(ValueError, match="six"):
+        Renderer(box_scene(), face_colors={0: faces[:5]})
