@@ -6,8 +6,8 @@ Scenes (dt = 1/240, ``rigid_gym.report.scenes``): the 10-cube stack and the 55-b
 (sleeping on and off), the pyramid beside a rolling ball, piles of 10, 100 and 1000 falling
 and settling (sleeping exact, off, and stopping slow islands), a batch of perturbed piles
 stepped on the calling thread and shared out over the pool, the stages switched off one by
-one, the other rotation orders, a change of dt and of materials in mid-run, and one world
-timed (``profile=True``). Tasks: Push, Stack and Throw under their scripted policies through
+one, the other rotation orders, a change of dt and of materials in mid-run, gravity off the axes,
+and one world timed (``profile=True``). Tasks: Push, Stack and Throw under their scripted policies through
 ``gym.make`` and ``gym.make_vec`` (B = 8). Each line: the case, the sha256 of its state,
 listed pairs, impulses and sleeping flags, and that of its stage counts.
 
@@ -74,6 +74,8 @@ def scene_cases(quick: bool):
         return world
 
     stack, pyr, ball, pile10 = cube_stack(10), pyramid(10), pyramid_and_ball(10, -1.0), pile(10)
+    tilted = pile(10)
+    tilted.gravity = np.array([1.3, -0.7, -9.6])
     cases = [
         ("stack", run(stack, 480)),
         ("stack, no sleep", run(stack, 480, sleep=False)),
@@ -91,6 +93,7 @@ def scene_cases(quick: bool):
                                              rotation_order=1, keep_energy=False)),
         ("pile 10, order 3, brute force", run(pile10, 240, rotation_order=3, sweep=False)),
         ("pile 10, changes", changing),
+        ("pile 10, tilted gravity", run(tilted, 240)),
         ("pile 10 x 8, alone", run(pile10, 240, num_worlds=8, shared=False, perturb=True)),
         ("pile 10 x 8, shared", run(pile10, 240, num_worlds=8, shared=True, perturb=True)),
         ("pile 10 x 8, shared, speed", run(pile10, 240, num_worlds=8, shared=True,

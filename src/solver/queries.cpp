@@ -8,9 +8,9 @@
 
 namespace rg {
 
-std::vector<int32_t> candidate_pairs(StepContext& context, double margin, int w) {
-    const int n = context.num_bodies();
-    const WorldStep s = context.world(w);
+std::vector<int32_t> candidate_pairs(Batch& batch, double margin, int w) {
+    const int n = batch.num_bodies();
+    const StepContext s = batch.world(w);
     Array<Aabb> bounds(n);
     Array<int64_t> order(n);
     Array<double> reach(n, 0.0);
@@ -24,8 +24,8 @@ std::vector<int32_t> candidate_pairs(StepContext& context, double margin, int w)
         }
         const PairLists lists = {bounds.span(), order.span(), pair_a.span(), pair_b.span(),
                                  keys.span(),   spare.span(), reach.span()};
-        const int64_t count = find_world_pairs(context.geometry(), s.model.motion, s.bodies, margin,
-                                               0.0, 0.0, context.settings().sweep, lists);
+        const int64_t count = find_world_pairs(batch.geometry(), s.model.motion, s.bodies, margin,
+                                               0.0, 0.0, batch.settings().sweep, lists);
         if (count <= capacity) {
             std::vector<int32_t> pairs(2 * count);
             for (int64_t k = 0; k < count; ++k) {
@@ -38,15 +38,15 @@ std::vector<int32_t> candidate_pairs(StepContext& context, double margin, int w)
     }
 }
 
-ContactRows detect_contacts(StepContext& context, double margin, int first, int last) {
-    const Geometry& geo = context.geometry();
+ContactRows detect_contacts(Batch& batch, double margin, int first, int last) {
+    const Geometry& geo = batch.geometry();
     margin += CLOSED_GAP;  // resting contacts: touching to round-off, as the solver counts them
     ContactRows rows;
     Array<Vec3> point(64), normal(64);
     Array<double> depth(64);
     for (int w = first; w < last; ++w) {
-        const WorldStep s = context.world(w);
-        const std::vector<int32_t> pairs = candidate_pairs(context, margin, w);
+        const StepContext s = batch.world(w);
+        const std::vector<int32_t> pairs = candidate_pairs(batch, margin, w);
         for (size_t k = 0; k < pairs.size(); k += 2) {
             const int a = pairs[k], b = pairs[k + 1];
             const Pose pa = {s.bodies.position[a], s.bodies.rotation[a]};
