@@ -194,6 +194,50 @@ def test_profile_reports_every_stage_timed_inside_the_step():
         timed.profiling = 1
 
 
+def test_settings_cross_to_the_core_as_one_bound_struct():
+    """SolverConfig's defaults are the core's (src/solver/settings.h), every field it hands the
+    core arrives by name, and the stages it reports on are the core's rules for them: the same
+    the World's batch steps by (shock propagation off without gravity, the broad phase off
+    without any impulse stage, the sleep stages with sleeping)."""
+    defaults, config = _core.Settings(), rg.SolverConfig()
+    for name in ("collision_passes", "contact_passes", "shock_sweeps", "rotation_order",
+                 "sleep", "sleep_speed", "detect_every_pass", "keep_energy",
+                 "overlap_correction"):
+        assert getattr(config, name) == getattr(defaults, name), name
+    custom = rg.SolverConfig(collision_passes=3, contact_passes=0, shock_sweeps=0,
+                             rotation_order=3, sleep=False, sleep_speed=0.02,
+                             detect_every_pass=True, keep_energy=False, overlap_correction=0.5)
+    settings = custom.settings(sweep=True)
+    assert (settings.collision_passes, settings.contact_passes, settings.shock_sweeps,
+            settings.rotation_order, settings.sleep, settings.sleep_speed,
+            settings.detect_every_pass, settings.keep_energy, settings.overlap_correction,
+            settings.sweep) == (3, 0, 0, 3, False, 0.02, True, False, 0.5, True)
+    assert list(config.phases()) == list(_core.STAGES)
+    assert config.phases(gravity=False)["shock_propagation"] is False
+    off = rg.SolverConfig(collision_passes=0, contact_passes=0, shock_sweeps=0, sleep=False)
+    assert [name for name, on in off.phases().items() if not on] == [
+        "sleep_check", "broad_phase", "sleep_islands", "collision", "contact",
+        "shock_propagation", "relist", "sleep_records"]
+    floating = rg.Scene(gravity=(0.0, 0.0, 0.0))
+    floating.add_body(rg.Sphere(0.05), mass=1.0)
+    floating.add_body(rg.Sphere(0.05), mass=1.0, position=(0.2, 0.0, 0.0))
+    world = rg.World(floating, config=config)
+    assert tuple(p["on"] for p in world.profile().values()) == world.core.stages
+    assert world.core.stages == tuple(config.phases(gravity=False).values())
+
+
+def test_the_state_layout_is_the_cores():
+    """World's named arrays are the core's views, named by the core's layout lists."""
+    world = rg.World(mixed_scene(), num_worlds=2)
+    assert rg.world.State._fields == _core.STATE
+    assert rg.world.Model._fields[1:5] == _core.MODEL
+    assert len(rg.world.Attachments._fields) == len(_core.ATTACHMENTS)
+    for name, array in zip(_core.STATE, world.state):
+        assert np.shares_memory(array, getattr(world.core, name)), name
+    for name, array in zip(_core.ATTACHMENTS, world.attached):
+        assert np.shares_memory(array, getattr(world.core, name)), name
+
+
 def test_profile_counts_skipped_and_repeated_stages():
     """Bodies in free flight, with no pair that could touch, skip the impulse stages, and so
     does a box asleep on the ground (its pair is not awake); once that box has slept through
