@@ -216,8 +216,8 @@ void bind_world(nb::module_& m) {
             std::vector<int32_t> a(count), b(count);
             std::vector<double> impulse(3 * count);
             for (int64_t k = 0; k < count; ++k) {
-                a[k] = c.pair_a[base + k];
-                b[k] = c.pair_b[base + k];
+                a[k] = c.lists.pair_a[base + k];
+                b[k] = c.lists.pair_b[base + k];
                 const Vec3 j = c.pair_impulse[base + k];
                 impulse[3 * k] = j.x;
                 impulse[3 * k + 1] = j.y;

@@ -11,26 +11,19 @@ namespace rg {
 std::vector<int32_t> candidate_pairs(Batch& batch, double margin, int w) {
     const int n = batch.num_bodies();
     const StepContext s = batch.world(w);
-    Array<Aabb> bounds(n);
-    Array<int64_t> order(n);
-    Array<double> reach(n, 0.0);
+    PairListBuffers buffers;  // one world's, apart from the batch's
     int64_t capacity = std::max<int64_t>(8, 2 * n);
     while (true) {
-        Array<int32_t> pair_a(capacity), pair_b(capacity);
-        Array<int64_t> keys(capacity), spare(capacity);
-        for (int i = 0; i < n; ++i) {
-            order[i] = i;
-            reach[i] = 0.0;
-        }
-        const PairLists lists = {bounds.span(), order.span(), pair_a.span(), pair_b.span(),
-                                 keys.span(),   spare.span(), reach.span()};
+        buffers.allocate_bodies(1, n);  // order 0..n-1, no reach
+        buffers.allocate_pairs(1, capacity);
+        const PairLists lists = buffers.rows(0);
         const int64_t count = find_world_pairs(batch.geometry(), s.model.motion, s.bodies, margin,
                                                0.0, 0.0, batch.settings().sweep, lists);
         if (count <= capacity) {
             std::vector<int32_t> pairs(2 * count);
             for (int64_t k = 0; k < count; ++k) {
-                pairs[2 * k] = pair_a[k];
-                pairs[2 * k + 1] = pair_b[k];
+                pairs[2 * k] = lists.pair_a[k];
+                pairs[2 * k + 1] = lists.pair_b[k];
             }
             return pairs;
         }

@@ -79,7 +79,7 @@ bool still_at_rest(StepContext& w, double dt);
 // their order; returns how many are awake.
 int64_t move_asleep_last(StepContext& w, int64_t count);
 
-// At the end of the impulse stages: the step's listed pairs and their impulses, for the
+// At the end of a step (after the impulse stages): its listed pairs and their impulses, for the
 // next step's asleep pairs.
 void keep_pair_impulses(StepContext& w);
 

@@ -3,8 +3,9 @@
 // step_world (step.cpp) runs them in this order, as Box2D v3's b2World_Step walks its
 // b2SolverStage list; each stage's row in a world's timers (timers.h) is its index here, and
 // World.profile() in Python reads the names and the rules from here (rigid_gym._core.STAGES,
-// stage_rules). A new stage is one entry here (its name and rule below) and one call in
-// step_world.
+// stage_rules). A new stage (continuous collision before the position update, joints among
+// the impulse stages) is one entry here, with its name and its rule below, and one call in
+// step_world (or impulse_stages, step.cpp).
 #pragma once
 
 #include <array>

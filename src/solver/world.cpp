@@ -45,6 +45,9 @@ void resize_rows(Array<T>& a, int num_worlds, int64_t old_count, int64_t new_cou
 // An entry viewed as world w's rows, into `out`.
 #define RG_VIEW(type, name, count, fill) out.name = name.rows(w * (count), count);
 #define RG_POINT(type, name, count, fill) out.name = &name[w];
+// An entry of pair rows regrown from row_pairs to p rows per world, each world's first rows
+// kept.
+#define RG_KEEP_ROWS(type, name, count, fill) resize_rows(name, worlds, row_pairs, p);
 
 void ContactSetBuffers::allocate(int worlds, int64_t c) {
     contacts = c;
@@ -109,6 +112,46 @@ ContactCache ContactCacheBuffers::view(int w) {
     return out;
 }
 
+void PairListBuffers::allocate_bodies(int worlds, int64_t n) {
+    row_bodies = n;
+    RG_PAIR_LIST_BODY_ROWS(RG_ALLOCATE)
+    for (int64_t w = 0; w < worlds; ++w) {
+        for (int64_t i = 0; i < n; ++i) {
+            order[w * n + i] = i;
+        }
+    }
+}
+
+void PairListBuffers::allocate_pairs(int worlds, int64_t p) {
+    if (row_pairs == 0) {
+        RG_PAIR_LIST_PAIR_ROWS(RG_ALLOCATE)
+    } else {
+        // every world keeps its last step's pairs, from which the next step carries its asleep
+        // ones (sleep.h): a world whose pairs overflowed abandoned its step before its
+        // sleeping bookkeeping changed, or woke (a relist), so no world is forgotten
+        RG_PAIR_LIST_PAIR_ROWS(RG_KEEP_ROWS)
+    }
+    row_pairs = p;
+}
+
+PairLists PairListBuffers::rows(int w) {
+    const int64_t n = row_bodies, p = row_pairs;
+    PairLists out;
+    RG_PAIR_LIST_BODY_ROWS(RG_VIEW)
+    RG_PAIR_LIST_PAIR_ROWS(RG_VIEW)
+    return out;
+}
+
+void StepBuffers::allocate(int worlds, int64_t n) {
+    row_bodies = n;
+    RG_STEP_ROWS(RG_ALLOCATE)
+}
+
+void StepBuffers::view(int w, StepContext& out) {
+    const int64_t n = row_bodies;
+    RG_STEP_ROWS(RG_VIEW)
+}
+
 void GraphBuffers::allocate(int worlds, int64_t n, int64_t p) {
     bodies = n;
     pairs = p;
@@ -132,9 +175,7 @@ void RestBuffers::allocate_pairs(int worlds, int64_t p) {
     if (row_pairs == 0) {
         RG_REST_PAIR_ROWS(RG_ALLOCATE)
     } else {
-#define RG_RESIZE(type, name, count, fill) resize_rows(name, worlds, row_pairs, p);
-        RG_REST_PAIR_ROWS(RG_RESIZE)
-#undef RG_RESIZE
+        RG_REST_PAIR_ROWS(RG_KEEP_ROWS)
     }
     row_pairs = p;
 }
@@ -178,15 +219,8 @@ Batch::Batch(int num_worlds, Geometry geometry, std::vector<int32_t> body_motion
     attach_parent.assign(b * n, -1);
     pair_count.assign(b, 0);
     asleep.assign(b * n, 0);
-    bounds_.assign(b * n, {});
-    order_.assign(b * n, 0);
-    for (int64_t w = 0; w < b; ++w) {
-        for (int64_t i = 0; i < n; ++i) {
-            order_[w * n + i] = i;
-        }
-    }
-    reach_.assign(b * n, 0.0);
-    start_.assign(b * 3 * n, {0.0, 0.0, 0.0});
+    lists.allocate_bodies(num_worlds_, n);
+    step_.allocate(num_worlds_, n);
     scratch_.allocate(num_worlds_, pair_contacts);
     wide_.allocate(num_worlds_, SUPPORT_CONTACTS * pair_contacts);
     body_reach_.assign(n, 0.0);
@@ -196,8 +230,6 @@ Batch::Batch(int num_worlds, Geometry geometry, std::vector<int32_t> body_motion
             body_reach_[i] = length({std::fabs(c.x) + e.x, std::fabs(c.y) + e.y, std::fabs(c.z) + e.z});
         }
     }
-    pairs_of_.assign(b * n, 0);
-    overlap_shift_.assign(b * n, {0.0, 0.0, 0.0});
     stage_seconds.assign(b * STAGE_COUNT, 0.0);
     stage_calls.assign(b * STAGE_COUNT, 0);
     rest_.allocate_bodies(num_worlds_, n);
@@ -209,20 +241,12 @@ Batch::Batch(int num_worlds, Geometry geometry, std::vector<int32_t> body_motion
 void Batch::allocate_pairs(int64_t capacity) {
     const int64_t b = num_worlds_;
     if (pair_capacity_ == 0) {
-        pair_a.assign(b * capacity, 0);
-        pair_b.assign(b * capacity, 0);
         pair_impulse.assign(b * capacity, {0.0, 0.0, 0.0});
     } else {
-        // every world keeps its last step's pairs, from which the next step carries its asleep
-        // ones (sleep.h): a world whose pairs overflowed abandoned its step before its
-        // sleeping bookkeeping changed, or woke (a relist), so no world is forgotten
-        resize_rows(pair_a, num_worlds_, pair_capacity_, capacity);
-        resize_rows(pair_b, num_worlds_, pair_capacity_, capacity);
-        resize_rows(pair_impulse, num_worlds_, pair_capacity_, capacity);
+        resize_rows(pair_impulse, num_worlds_, pair_capacity_, capacity);  // as the pairs'
     }
+    lists.allocate_pairs(num_worlds_, capacity);
     rest_.allocate_pairs(num_worlds_, capacity);
-    keys_.assign(b * capacity, 0);
-    spare_.assign(b * capacity, 0);
     graph_.allocate(num_worlds_, num_bodies_, capacity);
     contacts_.allocate_pairs(num_worlds_, capacity);
     pair_capacity_ = capacity;
@@ -275,23 +299,14 @@ StepContext Batch::world(int w) {
     s.attached.parent = world_rows(attach_parent, w, n);
     s.attached.offset_position = world_rows(attach_offset_position, w, n);
     s.attached.offset_orientation = world_rows(attach_offset_orientation, w, n);
-    PairLists& lists = s.lists;
-    lists.bounds = world_rows(bounds_, w, n);
-    lists.order = world_rows(order_, w, n);
-    lists.pair_a = world_rows(pair_a, w, p);
-    lists.pair_b = world_rows(pair_b, w, p);
-    lists.keys = world_rows(keys_, w, p);
-    lists.spare = world_rows(spare_, w, p);
-    lists.reach = world_rows(reach_, w, n);
+    s.lists = lists.rows(w);
     s.pair_count = &pair_count[w];
     s.pair_impulse = world_rows(pair_impulse, w, p);
-    s.start = world_rows(start_, w, 3 * n);
+    step_.view(w, s);
     s.contacts = contacts_.view(w);
     s.body_reach = {body_reach_.data(), n};
     s.scratch = scratch_.rows(w);
     s.wide = wide_.rows(w);
-    s.pairs_of = world_rows(pairs_of_, w, n);
-    s.overlap_shift = world_rows(overlap_shift_, w, n);
     s.graph = graph_.rows(w);
     s.rest = rest_.rows(w, world_rows(asleep, w, n));
     s.timers.seconds = world_rows(stage_seconds, w, STAGE_COUNT);

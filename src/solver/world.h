@@ -133,6 +133,13 @@ struct ContactCache {
     RG_CACHE_COUNTS(RG_POINTER_FIELD)
 };
 
+// The step's own rows (step.cpp, solver.h, overlap.h), n bodies.
+#define RG_STEP_ROWS(X)                                                                       \
+    X(Vec3, start, 3 * n, Vec3{})   /* velocity, angular momentum and angular velocity when */ \
+                                    /* the impulse stages began (restored to rerun them) */    \
+    X(int64_t, pairs_of, n, 0)      /* in how many listed pairs each body is */               \
+    X(Vec3, overlap_shift, n, Vec3{}) /* m, overlap.h's position corrections */
+
 // One world's step: its rows of every buffer, the step's dt and the stages it runs (Box2D's
 // b2StepContext). Batch::world makes one for each world a call steps.
 struct StepContext {
@@ -148,15 +155,12 @@ struct StepContext {
     PairLists lists;
     int64_t* pair_count;     // may exceed the capacity: the buffers are too small
     Span<Vec3> pair_impulse;  // (P,) N s, each pair's impulse on its body a in the current step
-    Span<Vec3> start;        // (3 n,) velocity, angular momentum and angular velocity when
-                             //        the step's impulse stages began (restored to rerun them)
+    RG_STEP_ROWS(RG_SPAN_FIELD)
     ContactCache contacts;   // the step's contacts, found once
     Span<const double> body_reach;  // (n,) m, the largest distance of a body's point from its
                                     //      centre (bounded bodies; 0 for planes)
     ContactSet scratch;      // one pair's contacts (C, the pair contact capacity)
     ContactSet wide;         // one body's contacts with all its frozen supports
-    Span<int64_t> pairs_of;  // (n,) in how many listed pairs each body is
-    Span<Vec3> overlap_shift;  // (n,) m, overlap.h's position corrections
     Graph graph;
     Rest rest;
     StageTimers timers;      // the world's time per stage, filled by step_world
@@ -201,6 +205,29 @@ struct ContactCacheBuffers {
     // Q = num_rows rows per world, the limits left as they are.
     void allocate_storage(int num_worlds, int64_t num_rows);
     ContactCache view(int w);
+};
+
+// The batched buffers behind a PairLists (broad_phase.h): B worlds of n bodies and P pairs.
+// pair_a and pair_b hold what the last step listed (read by queries); each world keeps its
+// first rows when P grows. order starts as 0..n-1 in every world.
+struct PairListBuffers {
+    RG_PAIR_LIST_BODY_ROWS(RG_ARRAY_FIELD)
+    RG_PAIR_LIST_PAIR_ROWS(RG_ARRAY_FIELD)
+    int64_t row_bodies = 0, row_pairs = 0;  // n, P
+
+    void allocate_bodies(int num_worlds, int64_t num_bodies);
+    void allocate_pairs(int num_worlds, int64_t num_pairs);
+    PairLists rows(int w);
+};
+
+// The batched buffers behind the step's own rows (RG_STEP_ROWS): B worlds of n bodies.
+struct StepBuffers {
+    RG_STEP_ROWS(RG_ARRAY_FIELD)
+    int64_t row_bodies = 0;  // n
+
+    void allocate(int num_worlds, int64_t num_bodies);
+    // World w's rows, into the step context.
+    void view(int w, StepContext& out);
 };
 
 // The batched buffers behind a Graph: B worlds of n bodies and P pairs, allocated afresh
@@ -269,7 +296,7 @@ public:
     Array<Quat> attach_offset_orientation;
     // What the last step listed, per world: read by queries.
     Array<int64_t> pair_count;      // (B,)
-    Array<int32_t> pair_a, pair_b;  // (B, P)
+    PairListBuffers lists;          // pair_a, pair_b (B, P)
     Array<Vec3> pair_impulse;       // (B, P)
     Array<uint8_t> asleep;          // (B, n)
     // Time per stage of every step so far (timers.h), per world: read by World.profile().
@@ -288,17 +315,11 @@ private:
     StageSwitches stages_;
     double gravity_length_;
     Vec3 up_;
-    // broad phase, per body (n) and per pair (P)
-    Array<Aabb> bounds_;
-    Array<int64_t> order_, keys_, spare_;
-    Array<double> reach_;
-    Array<Vec3> start_;  // (B, 3 n)
+    StepBuffers step_;
     // impulse stages
     ContactCacheBuffers contacts_;
-    Array<double> body_reach_;
+    Array<double> body_reach_;  // (n,) shared by the worlds
     ContactSetBuffers scratch_, wide_;
-    Array<int64_t> pairs_of_;
-    Array<Vec3> overlap_shift_;
     GraphBuffers graph_;
     RestBuffers rest_;  // sleeping
 };
