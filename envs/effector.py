@@ -22,7 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from rigid_gym._core import command_pads
+from rigid_gym._core import Pads
 
 from rigid_gym.shapes import Box
 
@@ -66,14 +66,13 @@ class SuctionGripper:
         self.step_time = step_time
         self.workspace = workspace
         self.held = np.full(world.num_worlds, -1, dtype=np.int64)
-        k, b = len(self.objects), world.num_worlds
-        # what every command passes to the core, made once: the workspace, the pad's size and
-        # command_pads' work arrays (the objects' poses, the targets and their lowest z)
-        self.low, self.high = np.array(workspace.low), np.array(workspace.high)
-        self.pad_half = np.array(PAD_HALF_EXTENTS)
-        self.work = (np.empty((k, 3)), np.empty((k, 3, 3)), np.empty((b, 3)), np.empty(b))
+        # what every command passes to the core, fixed once (the pads, the boxes, the workspace)
+        self.pads = Pads(num_worlds=world.num_worlds, num_bodies=len(world.scene), pad=body,
+                         pad_half=PAD_HALF_EXTENTS, objects=self.objects,
+                         halves=self.half_extents, low=workspace.low, high=workspace.high,
+                         step_distance=STEP_DISTANCE, step_time=step_time)
         # a contact within GRIP_MARGIN needs the centres within the two bounding spheres
-        reach = (np.linalg.norm(self.pad_half) + np.linalg.norm(self.half_extents, axis=1)
+        reach = (np.linalg.norm(PAD_HALF_EXTENTS) + np.linalg.norm(self.half_extents, axis=1)
                  + GRIP_MARGIN + REACH_SLACK)
         self.reach_squared = reach * reach
 
@@ -94,9 +93,8 @@ class SuctionGripper:
         s = self.world.state
         # the velocity written into the state as World.set_velocity would (it never turns:
         # omega stays 0), without its checks: the target is finite by construction
-        command_pads(np.ascontiguousarray(motions), s.position, s.rotation, s.velocity,
-                     self.body, self.pad_half, self.objects, self.half_extents, self.held,
-                     self.low, self.high, STEP_DISTANCE, self.step_time, *self.work)
+        self.pads.command(np.ascontiguousarray(motions), s.position, s.rotation, s.velocity,
+                          self.held)
         if grips is not None:
             self.grip(grips)
 

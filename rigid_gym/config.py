@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from rigid_gym import _core
 from rigid_gym._core import DYNAMIC
 from rigid_gym.checks import in_range, integer
 
@@ -20,6 +21,8 @@ if TYPE_CHECKING:
     from rigid_gym.scene import Scene
 
 ROTATION_ORDERS = (1, 2, 3)
+CORE_DEFAULTS = _core.Settings()
+"""The core's defaults of the settings it takes (``src/solver/settings.h``): SolverConfig's."""
 
 
 @dataclass(frozen=True)
@@ -69,17 +72,17 @@ class SolverConfig:
         (``src/solver/contacts.h``); kept to measure what the difference costs and changes.
     """
 
-    collision_passes: int = 5
-    contact_passes: int = 10
-    shock_sweeps: int = 2
-    rotation_order: int = 2
+    collision_passes: int = CORE_DEFAULTS.collision_passes
+    contact_passes: int = CORE_DEFAULTS.contact_passes
+    shock_sweeps: int = CORE_DEFAULTS.shock_sweeps
+    rotation_order: int = CORE_DEFAULTS.rotation_order
     box_edge_segments: int = 4
     sweep: bool | None = None
-    sleep: bool = True
-    sleep_speed: float = 0.0
-    detect_every_pass: bool = False
-    keep_energy: bool = True
-    overlap_correction: float = 1.0
+    sleep: bool = CORE_DEFAULTS.sleep
+    sleep_speed: float = CORE_DEFAULTS.sleep_speed
+    detect_every_pass: bool = CORE_DEFAULTS.detect_every_pass
+    keep_energy: bool = CORE_DEFAULTS.keep_energy
+    overlap_correction: float = CORE_DEFAULTS.overlap_correction
 
     def __post_init__(self):
         for name, low, high in (("collision_passes", 0, 1000), ("contact_passes", 0, 1000),
@@ -126,28 +129,20 @@ class SolverConfig:
             derived["shock_sweeps"] = 0
         return cls(**{**derived, **overrides})
 
-    def core_settings(self, gravity: np.ndarray, sweep: bool) -> dict:
-        """The core's view of this config (``Settings`` in ``src/solver/world.h``) for a scene with
-        ``gravity`` (3,) m/s^2, the broad phase by sort and sweep or not."""
-        magnitude = float(np.linalg.norm(gravity))
-        up = -gravity / magnitude if magnitude > 0.0 else np.array([0.0, 0.0, 1.0])
-        return {"collision_passes": self.collision_passes, "contact_passes": self.contact_passes,
-                "shock_sweeps": self.shock_sweeps, "rotation_order": self.rotation_order,
-                "sweep": bool(sweep), "broad_phase": self.phases()["broad_phase"],
-                "sleep": self.sleep, "sleep_speed": float(self.sleep_speed),
-                "detect_every_pass": self.detect_every_pass,
-                "keep_energy": self.keep_energy, "overlap_correction": self.overlap_correction,
-                "gravity": magnitude, "up": tuple(float(u) for u in up)}
+    def settings(self, sweep: bool = False) -> _core.Settings:
+        """The core's view of this config (``Settings`` in ``src/solver/settings.h``), the broad
+        phase by sort and sweep or not (``sweep`` as ``collision.uses_sweep`` decides it)."""
+        s = _core.Settings()
+        for name in ("collision_passes", "contact_passes", "shock_sweeps", "rotation_order",
+                     "sleep", "detect_every_pass", "keep_energy"):
+            setattr(s, name, getattr(self, name))
+        s.sleep_speed = float(self.sleep_speed)
+        s.overlap_correction = float(self.overlap_correction)
+        s.sweep = bool(sweep)
+        return s
 
     def phases(self, gravity: bool = True) -> dict[str, bool]:
-        """Which phases of the step run, by name, in step order. Shock propagation orders
-        bodies along gravity, so without gravity (``gravity=False``) it never runs."""
-        return {
-            "broad_phase": self.collision_passes > 0 or self.contact_passes > 0
-            or self.shock_sweeps > 0,
-            "collision": self.collision_passes > 0,
-            "update_velocities": True,
-            "contact": self.contact_passes > 0,
-            "shock_propagation": self.shock_sweeps > 0 and gravity,
-            "update_positions": True,
-        }
+        """Which stages of the step run, by name, in step order (the core's rules:
+        ``_core.stage_rules``). Shock propagation orders bodies along gravity, so without
+        gravity (``gravity=False``) it never runs."""
+        return dict(zip(_core.STAGES, _core.stage_rules(self.settings(), bool(gravity))))

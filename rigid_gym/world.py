@@ -6,7 +6,7 @@
 
 State is held per body at the centre of mass in the principal frame (see ``rigid_gym.scene``).
 Every array has a leading world axis internally; a world built without ``num_worlds`` shows it
-dropped. The arrays live in the compiled core (``World.core``, a ``rigid_gym._core.StepContext``
+dropped. The arrays live in the compiled core (``World.core``, a ``rigid_gym._core.Batch``
 that owns every buffer the step uses); ``World.state`` and ``World.model`` are numpy views of
 them. ``World.model`` and the arrays returned by properties are read-only views: change them
 with the setters (``set_material`` for masses and materials), which validate their input
@@ -114,18 +114,15 @@ class World:
         self.geometry = compile_geometry(scene.bodies, self.config.box_edge_segments)
         motion = np.array([b.motion for b in scene.bodies], dtype=np.int32)
         sweep = uses_sweep(self.geometry.body_unbounded, self.config.sweep)
-        self.core = _core.StepContext(self.num_worlds, self.geometry._asdict(), motion,
-                                      tuple(scene.gravity.tolist()),
-                                      self.config.core_settings(scene.gravity, sweep),
-                                      max_pair_contacts(self.geometry))
+        self.core = _core.Batch(self.num_worlds, self.geometry._asdict(), motion,
+                                tuple(scene.gravity.tolist()), self.config.settings(sweep),
+                                max_pair_contacts(self.geometry))
         c = self.core
-        self.state = State(c.position, c.orientation, c.velocity, c.angular_momentum,
-                           c.angular_velocity, c.rotation, c.force, c.torque)
+        self.state = State(**{name: getattr(c, name) for name in _core.STATE})
         self.model = Model(motion, *self._materials(), scene.gravity.copy())
         for array in self.model:  # read-only through this name; set_material writes the core's
             array.flags.writeable = False
-        self.attached = Attachments(c.attach_parent, c.attach_offset_position,
-                                    c.attach_offset_orientation)
+        self.attached = Attachments(*(getattr(c, name) for name in _core.ATTACHMENTS))
         for current, new in zip(self._materials(), _build_model(scene, self.num_worlds)[1:5]):
             current[...] = new
         for current, new in zip(self.state, _build_state(scene, self.num_worlds)):
@@ -219,8 +216,9 @@ class World:
     def _materials(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Writable views of the core's inverse_mass, inverse_moments, friction and restitution
         (``Model``'s layout), for the methods that change them."""
-        c = self.core
-        return c.inverse_mass, c.inverse_moments, c.friction, c.restitution
+        inverse_mass, inverse_moments, friction, restitution = (
+            getattr(self.core, name) for name in _core.MODEL)
+        return inverse_mass, inverse_moments, friction, restitution
 
     @property
     def time(self) -> float:
@@ -360,23 +358,24 @@ class World:
         self.core.timed = on
 
     def profile(self) -> dict[str, dict]:
-        """Per stage of the step, in step order (the names of ``SolverConfig.phases``):
-        {"on": whether the config runs it, "seconds": wall time spent in it (s) while
-        ``profiling``, "calls": how many times it ran}, summed over every world and every
-        step since the World was made (resets included). The step counts and times its
-        stages itself (``src/solver/timers.h``); a batch's seconds add up its worlds' time on every
-        thread.
+        """Per stage of the step, in step order (``rigid_gym._core.STAGES``, the names of
+        ``SolverConfig.phases``): {"on": whether the config runs it in this scene, "seconds":
+        wall time spent in it (s) while ``profiling``, "calls": how many times it ran}, summed
+        over every world and every step since the World was made (resets included). The step
+        counts and times its stages itself (``src/solver/timers.h``); a batch's seconds add up
+        its worlds' time on every thread. A stage's seconds are its own: the impulse stages run
+        again inside a relisting are theirs, not the relisting's.
 
-        A stage with nothing to do in a step is not run (no listed pair: no collision, contact
-        or shock stage); the broad phase runs once per step where the config lists pairs, and
-        a step whose impulses sped a body past its box runs the impulse stages again (their
-        calls count it, the relisting is the broad phase's time). A step of a world at rest
-        (every dynamic body asleep and nothing changed since the last step) runs no stage:
-        its check is the broad phase's time."""
-        on = self.config.phases(bool(np.any(self.model.gravity)))
+        A stage with nothing to do in a step is not run (no awake pair: no collision, contact
+        or shock stage; no contact found: no overlap correction); the broad phase runs once
+        per step where the config lists pairs, and a step whose impulses sped a body past its
+        box relists its pairs and runs the impulse stages again (their calls count it). With
+        sleeping, a step of a world at rest (every dynamic body asleep and nothing changed
+        since the last step) runs only the sleep check."""
+        on = self.core.stages
         seconds = self.core.stage_seconds.sum(axis=0)
         calls = self.core.stage_calls.sum(axis=0)
-        return {name: {"on": on[name], "seconds": float(seconds[k]), "calls": int(calls[k])}
+        return {name: {"on": on[k], "seconds": float(seconds[k]), "calls": int(calls[k])}
                 for k, name in enumerate(_core.STAGES)}
 
     def body_index(self, name: str) -> int:

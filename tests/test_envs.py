@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from gymnasium.error import ResetNeeded
 from gymnasium.utils.env_checker import check_env
-from rigid_gym._core import gather_observations
+from rigid_gym._core import Pads, gather_observations
 from rigid_gym.envs.core import ALL
-from rigid_gym.envs.effector import PAD_HALF_EXTENTS, Workspace
+from rigid_gym.envs.effector import PAD_HALF_EXTENTS, STEP_DISTANCE, Workspace
 from rigid_gym.envs.scripted import scripted_policy
 from rigid_gym.envs.task import CUBE_HALF, CUBE_MASS, STEP_TIME
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
@@ -214,6 +214,42 @@ def test_pressing_down_on_a_cube_stops_at_its_top_and_leaves_it_on_the_table():
         env.step([0, 0, -1])
     np.testing.assert_allclose(env.world.position[env.cubes[0]], start, atol=1e-9)
     assert env.gripper.position[2] == pytest.approx(2 * CUBE_HALF + PAD_HALF_EXTENTS[2], abs=1e-9)
+
+
+def test_pads_check_what_they_are_made_with_and_commanded():
+    """The gripper's bound command object refuses a pad or an object that is no body, a step
+    time <= 0 and arrays of other shapes, saying which; a command sets only the pads'
+    velocities: step_distance x motion / step_time where nothing is below."""
+    def pads(**changes):
+        kwargs = {"num_worlds": 2, "num_bodies": 3, "pad": 2, "pad_half": PAD_HALF_EXTENTS,
+                  "objects": np.array([1], dtype=np.int64), "halves": np.full((1, 3), 0.02),
+                  "low": (-1.0, -1.0, 0.0), "high": (1.0, 1.0, 1.0),
+                  "step_distance": STEP_DISTANCE, "step_time": 0.04}
+        return Pads(**{**kwargs, **changes})
+
+    with pytest.raises(ValueError, match="Pads: pad 3 is not a body"):
+        pads(pad=3)
+    with pytest.raises(ValueError, match="Pads: step_time must be > 0"):
+        pads(step_time=0.0)
+    with pytest.raises(ValueError, match="Pads: objects"):
+        pads(objects=np.array([5], dtype=np.int64))
+    with pytest.raises(ValueError, match="Pads: halves"):
+        pads(halves=np.full((2, 3), 0.02))
+    driver = pads()
+    positions = np.zeros((2, 3, 3))
+    positions[:, 1] = (0.5, 0.5, 0.02)  # the box, away from the pads
+    positions[:, 2] = (0.0, 0.0, 0.5)
+    rotations = np.tile(np.eye(3), (2, 3, 1, 1))
+    velocities = np.zeros((2, 3, 3))
+    held = np.array([-1, -1], dtype=np.int64)
+    motions = np.array([[1.0, 0.0, -1.0], [0.0, 0.5, 0.0]])
+    driver.command(motions, positions, rotations, velocities, held)
+    np.testing.assert_allclose(velocities[:, 2], motions * STEP_DISTANCE / 0.04, rtol=1e-12)
+    assert not velocities[:, :2].any()
+    with pytest.raises(ValueError, match="Pads.command: motions"):
+        driver.command(motions[:1], positions, rotations, velocities, held)
+    with pytest.raises(ValueError, match="Pads.command: held"):
+        driver.command(motions, positions, rotations, velocities, np.array([0, 1]))
 
 
 def test_pad_stays_in_the_workspace():

@@ -142,13 +142,16 @@ def test_mesh_body_is_stored_at_its_centre_of_mass_in_its_principal_frame():
     np.testing.assert_allclose(body.body_from_shape.apply(props.center), 0.0, atol=1e-14)
 
 
-STAGES = ["broad_phase", "collision", "update_velocities", "contact", "shock_propagation",
-          "update_positions"]
+STAGES = ["sleep_check", "prepare", "broad_phase", "sleep_islands", "collision",
+          "update_velocities", "contact", "shock_propagation", "relist", "overlap_correction",
+          "update_positions", "sleep_records"]
+SLEEP_STAGES = ["sleep_check", "sleep_islands", "sleep_records"]
 
 
 def test_profile_reports_every_stage_timed_inside_the_step():
     """A box resting on the ground, kept awake, runs every stage its config switches on once
-    per step (for_scene leaves the collision stage out: every restitution is 0). The step
+    per step (for_scene leaves the collision stage out: every restitution is 0; without
+    sleeping its stages are off). The step
     counts its stages always and times them while profiling: the times are positive, they
     grow with every step, and together they fit inside the wall time of the step() calls; a
     world stepped without profiling counts the same calls, has no time and the same state to
@@ -164,10 +167,11 @@ def test_profile_reports_every_stage_timed_inside_the_step():
     elapsed = time.perf_counter() - start
     plain.step(5)
     profile = timed.profile()
-    assert list(profile) == STAGES
-    assert not profile["collision"]["on"]
-    assert profile["collision"]["calls"] == 0 and profile["collision"]["seconds"] == 0.0
-    ran = [name for name in STAGES if name != "collision"]
+    assert list(profile) == STAGES == list(_core.STAGES)
+    off = ["collision", *SLEEP_STAGES]
+    assert not any(profile[name]["on"] for name in off)
+    assert all(profile[name]["calls"] == 0 and profile[name]["seconds"] == 0.0 for name in off)
+    ran = [name for name in STAGES if name not in off]
     assert all(profile[name]["on"] and profile[name]["calls"] == 5 for name in ran)
     assert all(profile[name]["seconds"] > 0.0 for name in ran)
     assert sum(p["seconds"] for p in profile.values()) <= elapsed
@@ -190,18 +194,64 @@ def test_profile_reports_every_stage_timed_inside_the_step():
         timed.profiling = 1
 
 
+def test_settings_cross_to_the_core_as_one_bound_struct():
+    """SolverConfig's defaults are the core's (src/solver/settings.h), every field it hands the
+    core arrives by name, and the stages it reports on are the core's rules for them: the same
+    the World's batch steps by (shock propagation off without gravity, the broad phase off
+    without any impulse stage, the sleep stages with sleeping)."""
+    defaults, config = _core.Settings(), rg.SolverConfig()
+    for name in ("collision_passes", "contact_passes", "shock_sweeps", "rotation_order",
+                 "sleep", "sleep_speed", "detect_every_pass", "keep_energy",
+                 "overlap_correction"):
+        assert getattr(config, name) == getattr(defaults, name), name
+    custom = rg.SolverConfig(collision_passes=3, contact_passes=0, shock_sweeps=0,
+                             rotation_order=3, sleep=False, sleep_speed=0.02,
+                             detect_every_pass=True, keep_energy=False, overlap_correction=0.5)
+    settings = custom.settings(sweep=True)
+    assert (settings.collision_passes, settings.contact_passes, settings.shock_sweeps,
+            settings.rotation_order, settings.sleep, settings.sleep_speed,
+            settings.detect_every_pass, settings.keep_energy, settings.overlap_correction,
+            settings.sweep) == (3, 0, 0, 3, False, 0.02, True, False, 0.5, True)
+    assert list(config.phases()) == list(_core.STAGES)
+    assert config.phases(gravity=False)["shock_propagation"] is False
+    off = rg.SolverConfig(collision_passes=0, contact_passes=0, shock_sweeps=0, sleep=False)
+    assert [name for name, on in off.phases().items() if not on] == [
+        "sleep_check", "broad_phase", "sleep_islands", "collision", "contact",
+        "shock_propagation", "relist", "sleep_records"]
+    floating = rg.Scene(gravity=(0.0, 0.0, 0.0))
+    floating.add_body(rg.Sphere(0.05), mass=1.0)
+    floating.add_body(rg.Sphere(0.05), mass=1.0, position=(0.2, 0.0, 0.0))
+    world = rg.World(floating, config=config)
+    assert tuple(p["on"] for p in world.profile().values()) == world.core.stages
+    assert world.core.stages == tuple(config.phases(gravity=False).values())
+
+
+def test_the_state_layout_is_the_cores():
+    """World's named arrays are the core's views, named by the core's layout lists."""
+    world = rg.World(mixed_scene(), num_worlds=2)
+    assert rg.world.State._fields == _core.STATE
+    assert rg.world.Model._fields[1:5] == _core.MODEL
+    assert len(rg.world.Attachments._fields) == len(_core.ATTACHMENTS)
+    for name, array in zip(_core.STATE, world.state):
+        assert np.shares_memory(array, getattr(world.core, name)), name
+    for name, array in zip(_core.ATTACHMENTS, world.attached):
+        assert np.shares_memory(array, getattr(world.core, name)), name
+
+
 def test_profile_counts_skipped_and_repeated_stages():
     """Bodies in free flight, with no pair that could touch, skip the impulse stages, and so
     does a box asleep on the ground (its pair is not awake); once that box has slept through
     a step its world is at rest and runs no stage at all; in a falling pile the impulses of
     some steps speed a body past its box, and those steps run the impulse stages again with
-    the pairs that adds (the broad phase and the position update run once per step). A batch
-    counts every world's stages."""
+    the pairs that adds (the relisting check and the position update run once per step, the
+    broad phase again in a step run again for room). A batch counts every world's stages."""
     flying = rg.World(mixed_scene())
     flying.step(5)
     calls = {name: p["calls"] for name, p in flying.profile().items()}
-    assert calls == {"broad_phase": 5, "collision": 0, "update_velocities": 5, "contact": 0,
-                     "shock_propagation": 0, "update_positions": 5}
+    assert calls == {"sleep_check": 5, "prepare": 5, "broad_phase": 5, "sleep_islands": 5,
+                     "collision": 0, "update_velocities": 5, "contact": 0,
+                     "shock_propagation": 0, "relist": 5, "overlap_correction": 0,
+                     "update_positions": 5, "sleep_records": 5}
 
     scene = rg.Scene()
     scene.add_ground()
@@ -211,12 +261,15 @@ def test_profile_counts_skipped_and_repeated_stages():
     calls = {name: p["calls"] for name, p in resting.profile().items()}
     assert resting.sleeping()[1] and calls["broad_phase"] == calls["update_positions"] == 2
     assert calls["contact"] == calls["shock_propagation"] == 1  # asleep from the second step
+    assert calls["sleep_check"] == 5 and calls["sleep_records"] == 2  # at rest from the third
 
     single, batch = rg.World(pile(30)), rg.World(pile(30), num_worlds=3)
     single.step(150)
     batch.step(150)
     calls = {name: p["calls"] for name, p in single.profile().items()}
-    assert calls["broad_phase"] == calls["update_positions"] == 150
+    assert calls["relist"] == calls["update_positions"] == 150
+    # a step given up for room (its pairs or contacts overflowed) runs again whole
+    assert calls["prepare"] >= calls["broad_phase"] >= 150
     assert calls["update_velocities"] > 150 and calls["contact"] > 150
     assert calls["contact"] == calls["shock_propagation"] <= calls["update_velocities"]
     assert {name: p["calls"] for name, p in batch.profile().items()} == {

@@ -1,5 +1,7 @@
-// Python face of the gripper's command (src/envs/footprint.h): rigid_gym._core.command_pads, used by
+// Python face of the gripper's command (src/envs/footprint.h): rigid_gym._core.Pads, used by
 // envs/effector.py.
+#include <nanobind/stl/array.h>
+
 #include <string>
 
 #include "bindings/array_args.h"
@@ -8,89 +10,112 @@
 namespace rg {
 
 void bind_footprint(nb::module_& m) {
-    m.def(
-        "command_pads",
-        [](nb::handle motions, nb::handle positions, nb::handle rotations, nb::handle velocities,
-           int64_t pad, nb::handle pad_half, nb::handle objects, nb::handle halves,
-           nb::handle held, nb::handle low, nb::handle high, double step_distance,
-           double step_time, nb::handle boxes_x, nb::handle boxes_r, nb::handle targets,
-           nb::handle lowest) {
-            const auto mo = array_arg<const double>(motions, "command_pads: motions", {-1, 3});
-            const int64_t b = extent(mo, 0);
-            const auto x = array_arg<const double>(positions, "command_pads: positions",
-                                                   {b, -1, 3});
-            const int64_t n = extent(x, 1);
-            const auto r = array_arg<const double>(rotations, "command_pads: rotations",
-                                                   {b, n, 3, 3});
-            const auto v = array_arg<double>(velocities, "command_pads: velocities", {b, n, 3});
-            if (pad < 0 || pad >= n) {
-                throw nb::value_error(("command_pads: pad " + std::to_string(pad) +
-                                       " is not a body, outside [0, " + std::to_string(n) + ")")
-                                          .c_str());
-            }
-            if (!(step_time > 0.0)) {
-                throw nb::value_error(("command_pads: step_time must be > 0 s, got " +
-                                       std::to_string(step_time))
-                                          .c_str());
-            }
-            const auto ph = array_arg<const double>(pad_half, "command_pads: pad_half", {3});
-            const auto o = array_arg<const int64_t>(objects, "command_pads: objects", {-1});
-            const int64_t k = extent(o, 0);
-            const auto hv = array_arg<const double>(halves, "command_pads: halves", {k, 3});
-            const auto hd = array_arg<const int64_t>(held, "command_pads: held", {b});
-            const auto lo = array_arg<const double>(low, "command_pads: low", {3});
-            const auto hi = array_arg<const double>(high, "command_pads: high", {3});
-            const auto bx = array_arg<double>(boxes_x, "command_pads: boxes_x", {k, 3});
-            const auto br = array_arg<double>(boxes_r, "command_pads: boxes_r", {k, 3, 3});
-            const auto t = array_arg<double>(targets, "command_pads: targets", {b, 3});
-            const auto w = array_arg<double>(lowest, "command_pads: lowest", {b});
-            check_indices(rows<const int64_t>(o), 0, n, "command_pads: objects", "bodies");
-            check_indices(rows<const int64_t>(hd), -1, k, "command_pads: held",
-                          "indices into objects, -1: none");
-            // the parts under test are the pad and the box it holds: two at most
-            Vec3 parts_x[2], parts_half[2];
-            Mat3 parts_r[2];
-            FootprintQuery q;
-            q.positions = rows<const Vec3>(x);
-            q.rotations = rows<const Mat3>(r);
-            q.num_bodies = n;
-            q.pad = pad;
-            q.pad_half = rows<const Vec3>(ph)[0];
-            q.objects = rows<const int64_t>(o);
-            q.halves = rows<const Vec3>(hv);
-            q.held = rows<const int64_t>(hd);
-            q.parts_x = {parts_x, 2};
-            q.parts_r = {parts_r, 2};
-            q.parts_half = {parts_half, 2};
-            q.boxes_x = rows<Vec3>(bx);
-            q.boxes_r = rows<Mat3>(br);
-            PadCommand c;
-            c.motions = rows<const Vec3>(mo);
-            c.step_distance = step_distance;
-            c.low = rows<const Vec3>(lo)[0];
-            c.high = rows<const Vec3>(hi)[0];
-            c.step_time = step_time;
-            c.velocities = rows<Vec3>(v);
-            c.targets = rows<Vec3>(t);
-            c.lowest = rows<double>(w);
-            nb::gil_scoped_release unlocked;
-            command_pads(q, c);
-        },
-        nb::arg("motions"), nb::arg("positions"), nb::arg("rotations"), nb::arg("velocities"),
-        nb::arg("pad"), nb::arg("pad_half"), nb::arg("objects"), nb::arg("halves"),
-        nb::arg("held"), nb::arg("low"), nb::arg("high"), nb::arg("step_distance"),
-        nb::arg("step_time"), nb::arg("boxes_x"), nb::arg("boxes_r"), nb::arg("targets"),
-        nb::arg("lowest"),
-        "One env step's command of the gripper of every world (src/envs/footprint.h): the pad's "
-        "target is its centre plus step_distance (m) x motion, clamped to [low, high] (3,) m; "
-        "a downward move stops where the pad, or the box it holds, would rest on the table or "
-        "on the top of a box under its footprint (never lifting the pad); the pad's velocity is "
-        "set to reach the target in step_time (s). motions (B, 3) in [-1, 1]; positions "
-        "(B, n, 3) m, rotations (B, n, 3, 3) and velocities (B, n, 3) m/s (written: the pads') "
-        "of every body; pad: the pad's body index, pad_half (3,) m; objects (K,) int64 the "
-        "boxes' body indices and halves (K, 3) m their half extents (the same in every world); "
-        "held (B,) int64 the held box (an index into objects, -1: none). Work arrays, "
-        "overwritten: boxes_x (K, 3), boxes_r (K, 3, 3), targets (B, 3), lowest (B,).");
+    nb::class_<Pads>(m, "Pads",
+                     "The gripper pads of every world of a batch, as the envs drive them "
+                     "(src/envs/footprint.h; envs/effector.py).")
+        .def(
+            "__init__",
+            [](Pads* self, int64_t num_worlds, int64_t num_bodies, int64_t pad,
+               std::array<double, 3> pad_half, nb::handle objects, nb::handle halves,
+               std::array<double, 3> low, std::array<double, 3> high, double step_distance,
+               double step_time) {
+                if (num_worlds < 1) {
+                    throw nb::value_error("Pads: num_worlds must be >= 1");
+                }
+                if (pad < 0 || pad >= num_bodies) {
+                    throw nb::value_error(("Pads: pad " + std::to_string(pad) +
+                                           " is not a body, outside [0, " +
+                                           std::to_string(num_bodies) + ")")
+                                              .c_str());
+                }
+                if (!(step_time > 0.0)) {
+                    throw nb::value_error(
+                        ("Pads: step_time must be > 0 s, got " + std::to_string(step_time)).c_str());
+                }
+                const auto o = array_arg<const int64_t>(objects, "Pads: objects", {-1});
+                const int64_t k = extent(o, 0);
+                const auto hv = array_arg<const double>(halves, "Pads: halves", {k, 3});
+                check_indices(rows<const int64_t>(o), 0, num_bodies, "Pads: objects", "bodies");
+                Pads* p = new (self) Pads();
+                p->pad = pad;
+                p->pad_half = {pad_half[0], pad_half[1], pad_half[2]};
+                p->objects.assign(rows<const int64_t>(o).data, k);
+                p->halves.assign(rows<const Vec3>(hv).data, k);
+                p->low = {low[0], low[1], low[2]};
+                p->high = {high[0], high[1], high[2]};
+                p->step_distance = step_distance;
+                p->step_time = step_time;
+                p->boxes_x.assign(k, {});
+                p->boxes_r.assign(k, {});
+                p->targets.assign(num_worlds, {});
+                p->lowest.assign(num_worlds, 0.0);
+            },
+            nb::kw_only(), nb::arg("num_worlds"), nb::arg("num_bodies"), nb::arg("pad"),
+            nb::arg("pad_half"), nb::arg("objects"), nb::arg("halves"), nb::arg("low"),
+            nb::arg("high"), nb::arg("step_distance"), nb::arg("step_time"),
+            "B = num_worlds worlds of num_bodies bodies: pad is the pad's body index, pad_half "
+            "(3,) m its half extents; objects (K,) int64 the boxes' body indices and halves "
+            "(K, 3) m their half extents (the same in every world); low, high (3,) m the "
+            "workspace the pad's centre stays in; step_distance m of motion per unit of action; "
+            "step_time s per env step.")
+        .def(
+            "command",
+            [](Pads& p, nb::handle motions, nb::handle positions, nb::handle rotations,
+               nb::handle velocities, nb::handle held) {
+                const int64_t b = p.targets.size(), k = p.objects.size();
+                const auto mo = array_arg<const double>(motions, "Pads.command: motions", {b, 3});
+                const auto x = array_arg<const double>(positions, "Pads.command: positions",
+                                                       {b, -1, 3});
+                const int64_t n = extent(x, 1);
+                const auto r = array_arg<const double>(rotations, "Pads.command: rotations",
+                                                       {b, n, 3, 3});
+                const auto v = array_arg<double>(velocities, "Pads.command: velocities", {b, n, 3});
+                const auto hd = array_arg<const int64_t>(held, "Pads.command: held", {b});
+                check_indices(Span<const int64_t>{p.objects.data(), k}, 0, n,
+                              "Pads.command: objects", "bodies");
+                check_indices(rows<const int64_t>(hd), -1, k, "Pads.command: held",
+                              "indices into objects, -1: none");
+                if (p.pad >= n) {
+                    throw nb::value_error("Pads.command: the pad is not a body of positions");
+                }
+                // the parts under test are the pad and the box it holds: two at most
+                Vec3 parts_x[2], parts_half[2];
+                Mat3 parts_r[2];
+                FootprintQuery q;
+                q.positions = rows<const Vec3>(x);
+                q.rotations = rows<const Mat3>(r);
+                q.num_bodies = n;
+                q.pad = p.pad;
+                q.pad_half = p.pad_half;
+                q.objects = {p.objects.data(), k};
+                q.halves = {p.halves.data(), k};
+                q.held = rows<const int64_t>(hd);
+                q.parts_x = {parts_x, 2};
+                q.parts_r = {parts_r, 2};
+                q.parts_half = {parts_half, 2};
+                q.boxes_x = p.boxes_x.span();
+                q.boxes_r = p.boxes_r.span();
+                PadCommand c;
+                c.motions = rows<const Vec3>(mo);
+                c.step_distance = p.step_distance;
+                c.low = p.low;
+                c.high = p.high;
+                c.step_time = p.step_time;
+                c.velocities = rows<Vec3>(v);
+                c.targets = p.targets.span();
+                c.lowest = p.lowest.span();
+                nb::gil_scoped_release unlocked;
+                command_pads(q, c);
+            },
+            nb::arg("motions"), nb::arg("positions"), nb::arg("rotations"), nb::arg("velocities"),
+            nb::arg("held"),
+            "One env step's command of the gripper of every world: the pad's target is its "
+            "centre plus step_distance x motion, clamped to [low, high]; a downward move stops "
+            "where the pad, or the box it holds, would rest on the table or on the top of a box "
+            "under its footprint (never lifting the pad); the pad's velocity is set to reach the "
+            "target in step_time. motions (B, 3) in [-1, 1]; positions (B, n, 3) m, rotations "
+            "(B, n, 3, 3) and velocities (B, n, 3) m/s (written: the pads') of every body; held "
+            "(B,) int64 the held box (an index into objects, -1: none).");
 }
 
 }  // namespace rg

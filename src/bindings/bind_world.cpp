@@ -1,4 +1,4 @@
-// Python face of the step context: rigid_gym._core.StepContext (used by rigid_gym/world.py).
+// Python face of the batch: rigid_gym._core.Batch (used by rigid_gym/world.py).
 #include <nanobind/stl/array.h>
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/tuple.h>
@@ -8,6 +8,7 @@
 #include "bindings/arrays.h"
 #include "solver/integrate.h"
 #include "solver/queries.h"
+#include "solver/stages.h"
 #include "solver/step.h"
 #include "base/thread_pool.h"
 #include "solver/world.h"
@@ -52,44 +53,27 @@ Geometry read_geometry(const nb::dict& g) {
     return geo;
 }
 
-Settings read_settings(const nb::dict& s) {
-    Settings out;
-    out.collision_passes = item<int>(s, "collision_passes");
-    out.contact_passes = item<int>(s, "contact_passes");
-    out.shock_sweeps = item<int>(s, "shock_sweeps");
-    out.rotation_order = item<int>(s, "rotation_order");
-    out.sweep = item<bool>(s, "sweep");
-    out.broad_phase = item<bool>(s, "broad_phase");
-    out.sleep = item<bool>(s, "sleep");
-    out.sleep_speed = item<double>(s, "sleep_speed");
-    out.detect_every_pass = item<bool>(s, "detect_every_pass");
-    out.keep_energy = item<bool>(s, "keep_energy");
-    out.overlap_correction = item<double>(s, "overlap_correction");
-    out.gravity = item<double>(s, "gravity");
-    const auto up = item<std::array<double, 3>>(s, "up");
-    out.up = {up[0], up[1], up[2]};
-    return out;
-}
-
 // Worlds [first, last) checked against the batch.
-void check_worlds(const StepContext& c, int first, int last, const char* method) {
+void check_worlds(const Batch& c, int first, int last, const char* method) {
     if (first < 0 || last > c.num_worlds() || first > last) {
-        throw nb::index_error((std::string("StepContext.") + method + ": worlds [" +
+        throw nb::index_error((std::string("Batch.") + method + ": worlds [" +
                                std::to_string(first) + ", " + std::to_string(last) +
                                ") outside [0, " + std::to_string(c.num_worlds()) + ")")
                                   .c_str());
     }
 }
 
-using Context = nb::class_<StepContext>;
+using Context = nb::class_<Batch>;
 
-// A read-write numpy view (B, n, ...) of one of the context's batched buffers.
+// A read-write numpy view (B, n, ...) of one of the batch's buffers, its name appended to
+// `names` (the layout rigid_gym/world.py reads).
 template <class S, class T>
-void def_view(Context& cls, const char* name, Array<T> StepContext::*field,
+void def_view(Context& cls, nb::list& names, const char* name, Array<T> Batch::*field,
               std::initializer_list<size_t> row_shape) {
+    names.append(name);
     std::vector<size_t> tail(row_shape);
     cls.def_prop_ro(name, [field, tail](nb::handle self) {
-        StepContext& c = nb::cast<StepContext&>(self);
+        Batch& c = nb::cast<Batch&>(self);
         Array<T>& a = c.*field;
         const size_t b = c.num_worlds(), n = c.num_bodies();
         if (tail.empty()) {
@@ -102,56 +86,93 @@ void def_view(Context& cls, const char* name, Array<T> StepContext::*field,
     }, nb::rv_policy::reference);
 }
 
-}  // namespace
-
-void bind_world(nb::module_& m) {
+void bind_settings(nb::module_& m) {
+    nb::class_<Settings>(m, "Settings",
+                         "What SolverConfig decides, as the stages take it "
+                         "(src/solver/settings.h): its defaults are SolverConfig's.")
+        .def(nb::init<>())
+        .def_rw("collision_passes", &Settings::collision_passes)
+        .def_rw("contact_passes", &Settings::contact_passes)
+        .def_rw("shock_sweeps", &Settings::shock_sweeps)
+        .def_rw("rotation_order", &Settings::rotation_order)
+        .def_rw("sweep", &Settings::sweep)
+        .def_rw("sleep", &Settings::sleep)
+        .def_rw("sleep_speed", &Settings::sleep_speed)
+        .def_rw("detect_every_pass", &Settings::detect_every_pass)
+        .def_rw("keep_energy", &Settings::keep_energy)
+        .def_rw("overlap_correction", &Settings::overlap_correction);
     nb::list stages;
     for (const char* name : STAGE_NAMES) {
         stages.append(name);
     }
-    m.attr("STAGES") = nb::tuple(stages);  // the step's stages in order (src/solver/timers.h)
-    Context cls(m, "StepContext",
+    m.attr("STAGES") = nb::tuple(stages);  // the step's stages in order (src/solver/stages.h)
+    m.def(
+        "stage_rules",
+        [](const Settings& settings, bool gravity) {
+            const StageSwitches on = stage_rules(settings, gravity);
+            nb::list out;
+            for (bool stage_on : on) {
+                out.append(stage_on);
+            }
+            return nb::tuple(out);
+        },
+        nb::arg("settings"), nb::arg("gravity"),
+        "Which stages (STAGES' order) the steps of a scene with or without gravity run under "
+        "these settings (src/solver/stages.h); one switched on still skips a step in which it "
+        "has nothing to do.");
+}
+
+}  // namespace
+
+void bind_world(nb::module_& m) {
+    bind_settings(m);
+    Context cls(m, "Batch",
                 "Every buffer the step reads and writes for a batch of worlds of one scene "
                 "(src/solver/world.h). rigid_gym.World owns one; its state arrays are views of it.");
     cls.def(
         "__init__",
-        [](StepContext* self, int num_worlds, nb::dict geometry, InArray<int32_t> motion,
-           std::array<double, 3> gravity, nb::dict settings, int64_t pair_contacts) {
+        [](Batch* self, int num_worlds, nb::dict geometry, InArray<int32_t> motion,
+           std::array<double, 3> gravity, const Settings& settings, int64_t pair_contacts) {
             if (num_worlds < 1) {
-                throw nb::value_error("StepContext: num_worlds must be >= 1");
+                throw nb::value_error("Batch: num_worlds must be >= 1");
             }
             Geometry geo = read_geometry(geometry);
             const Array<int32_t> kinds = read_rows<int32_t>(motion, {}, "motion");
             if (kinds.size() != geo.num_bodies() || kinds.size() + 1 != geo.body_geom_start.size()) {
-                throw nb::value_error("StepContext: motion and geometry disagree on the bodies");
+                throw nb::value_error("Batch: motion and geometry disagree on the bodies");
             }
             std::vector<int32_t> classes(kinds.data(), kinds.data() + kinds.size());
-            new (self) StepContext(num_worlds, std::move(geo), std::move(classes),
-                                   {gravity[0], gravity[1], gravity[2]}, read_settings(settings),
-                                   pair_contacts);
+            new (self) Batch(num_worlds, std::move(geo), std::move(classes),
+                             {gravity[0], gravity[1], gravity[2]}, settings, pair_contacts);
         },
         nb::arg("num_worlds"), nb::arg("geometry"), nb::arg("motion"), nb::arg("gravity"),
         nb::arg("settings"), nb::arg("pair_contacts"));
-    def_view<double>(cls, "position", &StepContext::position, {3});
-    def_view<double>(cls, "orientation", &StepContext::orientation, {4});
-    def_view<double>(cls, "velocity", &StepContext::velocity, {3});
-    def_view<double>(cls, "angular_momentum", &StepContext::angular_momentum, {3});
-    def_view<double>(cls, "angular_velocity", &StepContext::angular_velocity, {3});
-    def_view<double>(cls, "rotation", &StepContext::rotation, {3, 3});
-    def_view<double>(cls, "force", &StepContext::force, {3});
-    def_view<double>(cls, "torque", &StepContext::torque, {3});
-    def_view<double>(cls, "inverse_mass", &StepContext::inverse_mass, {});
-    def_view<double>(cls, "inverse_moments", &StepContext::inverse_moments, {3});
-    def_view<double>(cls, "friction", &StepContext::friction, {});
-    def_view<double>(cls, "restitution", &StepContext::restitution, {});
-    def_view<int32_t>(cls, "attach_parent", &StepContext::attach_parent, {});
-    def_view<double>(cls, "attach_offset_position", &StepContext::attach_offset_position, {3});
-    def_view<double>(cls, "attach_offset_orientation", &StepContext::attach_offset_orientation, {4});
+    // the state (rigid_gym.world.State), the per-world model and the attachments, in order
+    nb::list state, model, attached;
+    def_view<double>(cls, state, "position", &Batch::position, {3});
+    def_view<double>(cls, state, "orientation", &Batch::orientation, {4});
+    def_view<double>(cls, state, "velocity", &Batch::velocity, {3});
+    def_view<double>(cls, state, "angular_momentum", &Batch::angular_momentum, {3});
+    def_view<double>(cls, state, "angular_velocity", &Batch::angular_velocity, {3});
+    def_view<double>(cls, state, "rotation", &Batch::rotation, {3, 3});
+    def_view<double>(cls, state, "force", &Batch::force, {3});
+    def_view<double>(cls, state, "torque", &Batch::torque, {3});
+    def_view<double>(cls, model, "inverse_mass", &Batch::inverse_mass, {});
+    def_view<double>(cls, model, "inverse_moments", &Batch::inverse_moments, {3});
+    def_view<double>(cls, model, "friction", &Batch::friction, {});
+    def_view<double>(cls, model, "restitution", &Batch::restitution, {});
+    def_view<int32_t>(cls, attached, "attach_parent", &Batch::attach_parent, {});
+    def_view<double>(cls, attached, "attach_offset_position", &Batch::attach_offset_position, {3});
+    def_view<double>(cls, attached, "attach_offset_orientation", &Batch::attach_offset_orientation,
+                     {4});
+    m.attr("STATE") = nb::tuple(state);
+    m.attr("MODEL") = nb::tuple(model);
+    m.attr("ATTACHMENTS") = nb::tuple(attached);
     cls.def(
         "step",
-        [](StepContext& c, int64_t steps, double dt) {
+        [](Batch& c, int64_t steps, double dt) {
             if (steps < 0 || !(dt > 0.0)) {
-                throw nb::value_error("StepContext.step: steps >= 0, dt > 0");
+                throw nb::value_error("Batch.step: steps >= 0, dt > 0");
             }
             nb::gil_scoped_release unlocked;
             advance(c, steps, dt);
@@ -161,42 +182,42 @@ void bind_world(nb::module_& m) {
         "each stage (src/solver/timers.h); the GIL is released meanwhile.");
     cls.def(
         "refresh",
-        [](StepContext& c, int first, int last) {
+        [](Batch& c, int first, int last) {
             check_worlds(c, first, last, "refresh");
             for (int w = first; w < last; ++w) {
-                const WorldStep s = c.world(w);
+                const StepContext s = c.world(w);
                 refresh_rotation_and_angular_velocity(s.bodies, s.model);
             }
         },
         "R(q) and omega = I^-1 L of worlds [first, last), after q or L were set.");
     cls.def(
         "place_attached",
-        [](StepContext& c, int first, int last) {
+        [](Batch& c, int first, int last) {
             check_worlds(c, first, last, "place_attached");
             for (int w = first; w < last; ++w) {
-                const WorldStep s = c.world(w);
+                const StepContext s = c.world(w);
                 place_attached(s.bodies, s.attached);
             }
         },
         "Put every attached body of worlds [first, last) at its offset from its parent.");
     cls.def(
         "forget",
-        [](StepContext& c, int first, int last) {
+        [](Batch& c, int first, int last) {
             check_worlds(c, first, last, "forget");
             c.forget(first, last);
         },
         "No body of worlds [first, last) sleeps in their next step.");
     cls.def(
         "pairs",
-        [](StepContext& c, int w) {
+        [](Batch& c, int w) {
             check_worlds(c, w, w + 1, "pairs");
             const int64_t count = std::min(c.pair_count[w], c.pair_capacity());
             const int64_t base = static_cast<int64_t>(w) * c.pair_capacity();
             std::vector<int32_t> a(count), b(count);
             std::vector<double> impulse(3 * count);
             for (int64_t k = 0; k < count; ++k) {
-                a[k] = c.pair_a[base + k];
-                b[k] = c.pair_b[base + k];
+                a[k] = c.lists.pair_a[base + k];
+                b[k] = c.lists.pair_b[base + k];
                 const Vec3 j = c.pair_impulse[base + k];
                 impulse[3 * k] = j.x;
                 impulse[3 * k + 1] = j.y;
@@ -210,7 +231,7 @@ void bind_world(nb::module_& m) {
         "each transmitted to its body a in it ((k, 3), N s); copies.");
     cls.def_prop_ro(
         "pair_counts",
-        [](StepContext& c) {
+        [](Batch& c) {
             std::vector<int64_t> counts(c.pair_count.data(), c.pair_count.data() + c.num_worlds());
             return hand_over(std::move(counts), {static_cast<size_t>(c.num_worlds())});
         },
@@ -218,7 +239,7 @@ void bind_world(nb::module_& m) {
         "(B,) pairs the last step listed in each world; a copy.");
     cls.def_prop_ro(
         "shared",
-        [](StepContext& c) -> std::optional<bool> {
+        [](Batch& c) -> std::optional<bool> {
             if (c.sharing.last() == 0) {
                 return std::nullopt;
             }
@@ -229,7 +250,7 @@ void bind_world(nb::module_& m) {
         "before a batch of several worlds has stepped with more than one thread.");
     cls.def(
         "force_sharing",
-        [](StepContext& c, std::optional<bool> shared) {
+        [](Batch& c, std::optional<bool> shared) {
             c.sharing.force(shared.has_value() ? static_cast<int>(*shared) : -1);
         },
         nb::arg("shared").none(),
@@ -237,11 +258,22 @@ void bind_world(nb::module_& m) {
         "(False), or as the batch's timings choose (None, the default; the choice starts "
         "afresh, shared then alone): src/solver/sharing.h. One world or a pool of one thread always "
         "steps on the calling thread.");
-    cls.def_rw("timed", &StepContext::timed,
+    cls.def_prop_ro(
+        "stages",
+        [](Batch& c) {
+            nb::list out;
+            for (bool stage_on : c.stages()) {
+                out.append(stage_on);
+            }
+            return nb::tuple(out);
+        },
+        "Which stages (STAGES' order) this batch's steps run: stage_rules of its settings and "
+        "its scene's gravity.");
+    cls.def_rw("timed", &Batch::timed,
                "Read the clock in every stage of every step, for stage_seconds (src/solver/timers.h).");
     cls.def_prop_ro(
         "stage_seconds",
-        [](StepContext& c) {
+        [](Batch& c) {
             std::vector<double> seconds(c.stage_seconds.data(),
                                         c.stage_seconds.data() + c.stage_seconds.size());
             return hand_over(std::move(seconds), {static_cast<size_t>(c.num_worlds()),
@@ -252,7 +284,7 @@ void bind_world(nb::module_& m) {
         "a copy.");
     cls.def_prop_ro(
         "stage_calls",
-        [](StepContext& c) {
+        [](Batch& c) {
             std::vector<int64_t> calls(c.stage_calls.data(),
                                        c.stage_calls.data() + c.stage_calls.size());
             return hand_over(std::move(calls), {static_cast<size_t>(c.num_worlds()),
@@ -262,7 +294,7 @@ void bind_world(nb::module_& m) {
         "(B, len(STAGES)) how many times each world ran each stage so far; a copy.");
     cls.def_prop_ro(
         "asleep",
-        [](StepContext& c) {
+        [](Batch& c) {
             std::vector<uint8_t> flags(c.asleep.data(), c.asleep.data() + c.asleep.size());
             return hand_over(std::move(flags), {static_cast<size_t>(c.num_worlds()),
                                                 static_cast<size_t>(c.num_bodies())});
@@ -271,7 +303,7 @@ void bind_world(nb::module_& m) {
         "(B, n) which bodies slept through the last step (1) or not (0); a copy.");
     cls.def(
         "candidate_pairs",
-        [](StepContext& c, double margin, int w) {
+        [](Batch& c, double margin, int w) {
             check_worlds(c, w, w + 1, "candidate_pairs");
             std::vector<int32_t> pairs = candidate_pairs(c, margin, w);
             const size_t k = pairs.size() / 2;
@@ -281,7 +313,7 @@ void bind_world(nb::module_& m) {
         "body indices (src/solver/queries.h).");
     cls.def(
         "contacts",
-        [](StepContext& c, double margin, int first, int last) {
+        [](Batch& c, double margin, int first, int last) {
             check_worlds(c, first, last, "contacts");
             ContactRows rows;
             {
@@ -300,7 +332,7 @@ void bind_world(nb::module_& m) {
         "body_b (k,), point, normal (k, 3), depth (k,).");
     nb::class_<BatchSharing>(m, "BatchSharing",
                              "The choice between stepping a batch on the calling thread and "
-                             "sharing it out over the pool, as each StepContext makes it from "
+                             "sharing it out over the pool, as each Batch makes it from "
                              "its own timings (src/solver/sharing.h); here to be fed timings by hand.")
         .def(nb::init<>())
         .def("share", &BatchSharing::share, "Share the next call out over the pool?")

@@ -23,17 +23,22 @@ struct Aabb {
     Vec3 lo, hi;
 };
 
-// One world's broad-phase buffers (n bodies, P pair capacity).
+// One world's broad-phase buffers (n bodies, p pair capacity), as a table (base/span.h).
+#define RG_PAIR_LIST_BODY_ROWS(X)                                                             \
+    X(Aabb, bounds, n, Aabb{})  /* scratch */                                                 \
+    X(int64_t, order, n, 0)     /* body indices, kept between calls (sort and sweep starts */ \
+                                /* from the last order: nearly sorted, O(n) to re-sort); */   \
+                                /* brute force's scratch (a world never changes method) */    \
+    X(double, reach, n, 0.0)    /* m, how far each body's box was grown */
+#define RG_PAIR_LIST_PAIR_ROWS(X)                                                             \
+    X(int32_t, pair_a, p, 0)    /* out */                                                     \
+    X(int32_t, pair_b, p, 0)    /* out */                                                     \
+    X(int64_t, keys, p, 0)      /* sorting scratch */                                         \
+    X(int64_t, spare, p, 0)     /* sorting scratch */
+
 struct PairLists {
-    Span<Aabb> bounds;      // (n,) scratch
-    Span<int64_t> order;    // (n,) body indices, kept between calls (sort and sweep starts
-                            //      from the last order: nearly sorted, O(n) to re-sort);
-                            //      brute force's scratch (a world never changes method)
-    Span<int32_t> pair_a;   // (P,) out
-    Span<int32_t> pair_b;   // (P,) out
-    Span<int64_t> keys;     // (P,) sorting scratch
-    Span<int64_t> spare;    // (P,) sorting scratch
-    Span<double> reach;     // (n,) m, how far each body's box was grown
+    RG_PAIR_LIST_BODY_ROWS(RG_SPAN_FIELD)
+    RG_PAIR_LIST_PAIR_ROWS(RG_SPAN_FIELD)
 };
 
 // How far (m) any point of body i can move in dt: |V| dt + |omega| dt (its reach from the

@@ -59,4 +59,20 @@ struct PadCommand {
 // is kinematic, and never turns). The arithmetic is numpy's on (B, 3) arrays, in its order.
 void command_pads(FootprintQuery query, const PadCommand& command);
 
+// The grippers of a batch of B worlds as the envs drive them (envs/effector.py): what every
+// command reads, fixed when they are made, and the command's work rows.
+struct Pads {
+    int64_t pad = 0;             // the pad's body index
+    Vec3 pad_half = {};          // m
+    Array<int64_t> objects;      // (K,) the boxes' body indices, the same in every world
+    Array<Vec3> halves;          // (K,) m, their half extents
+    Vec3 low = {}, high = {};    // m, the workspace the pad's centre stays in
+    double step_distance = 0;    // m of motion per unit, along each axis
+    double step_time = 0;        // s, the env step
+    Array<Vec3> boxes_x;         // (K,) work rows of FootprintQuery
+    Array<Mat3> boxes_r;         // (K,)
+    Array<Vec3> targets;         // (B,) work rows of PadCommand
+    Array<double> lowest;        // (B,)
+};
+
 }  // namespace rg

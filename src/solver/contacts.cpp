@@ -21,7 +21,7 @@ struct Prediction {
     Vec3 shift, turn;
 };
 
-Prediction predicted_motion(const WorldStep& w, int i, double dt, Vec3 lookahead) {
+Prediction predicted_motion(const StepContext& w, int i, double dt, Vec3 lookahead) {
     const int32_t motion = w.model.motion[i];
     if (motion == STATIC) {
         return {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
@@ -34,7 +34,7 @@ Prediction predicted_motion(const WorldStep& w, int i, double dt, Vec3 lookahead
 // Body i's pose after dt at its current velocity; dynamic bodies also move by lookahead (m):
 // the collision stage passes dt^2 g, so that a collision that gravity brings about within
 // this step is seen (and bounced) there.
-Pose predict_pose(const WorldStep& w, int i, double dt, Vec3 lookahead) {
+Pose predict_pose(const StepContext& w, int i, double dt, Vec3 lookahead) {
     Vec3 x = w.bodies.position[i];
     Quat q = w.bodies.orientation[i];
     const int32_t motion = w.model.motion[i];
@@ -52,7 +52,7 @@ Pose predict_pose(const WorldStep& w, int i, double dt, Vec3 lookahead) {
 // Body i's pose predicted for detect_contacts, found once for all its pairs: a body is in
 // several, and its pose costs a turn by its angular velocity (a sine and a cosine) and the
 // rotation matrix of the result.
-const Pose& detection_pose(WorldStep& w, int i, double dt, Vec3 lookahead) {
+const Pose& detection_pose(StepContext& w, int i, double dt, Vec3 lookahead) {
     const ContactCache& c = w.contacts;
     if (c.posed[i] != *c.detections) {
         c.pose[i] = predict_pose(w, i, dt, lookahead);
@@ -64,7 +64,7 @@ const Pose& detection_pose(WorldStep& w, int i, double dt, Vec3 lookahead) {
 // Detect pair k, its bodies predicted at poses pa and pb, into the pool's free rows; false
 // when they do not fit (the pair is then detected in every pass for the rest of the step,
 // which is run again: pool_overflowed).
-bool detect_pair(WorldStep& w, int64_t k, const Pose& pa, const Pose& pb, double dt, Vec3 lookahead) {
+bool detect_pair(StepContext& w, int64_t k, const Pose& pa, const Pose& pb, double dt, Vec3 lookahead) {
     ContactCache& c = w.contacts;
     const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
     const int64_t first = *c.used;
@@ -95,7 +95,7 @@ bool detect_pair(WorldStep& w, int64_t k, const Pose& pa, const Pose& pb, double
 // The narrow phase at the current prediction straight into set (Settings::detect_every_pass,
 // or a pair the pool could not hold in a step that will be run again), contacts deeper than
 // `threshold`.
-int64_t collide_now(WorldStep& w, const Gather& g, double dt, Vec3 lookahead, const ContactSet& set,
+int64_t collide_now(StepContext& w, const Gather& g, double dt, Vec3 lookahead, const ContactSet& set,
                     int64_t at) {
     const int a = w.lists.pair_a[g.k], b = w.lists.pair_b[g.k];
     const Pose pa = predict_pose(w, a, dt, lookahead), pb = predict_pose(w, b, dt, lookahead);
@@ -115,7 +115,7 @@ int64_t collide_now(WorldStep& w, const Gather& g, double dt, Vec3 lookahead, co
 
 }  // namespace
 
-void detect_contacts(WorldStep& w, int64_t pairs, double dt, Vec3 lookahead) {
+void detect_contacts(StepContext& w, int64_t pairs, double dt, Vec3 lookahead) {
     *w.contacts.used = 0;
     *w.contacts.needed = 0;
     *w.contacts.detections += 1;
@@ -131,7 +131,7 @@ void detect_contacts(WorldStep& w, int64_t pairs, double dt, Vec3 lookahead) {
     *w.contacts.detected = 1;
 }
 
-int64_t gather_pair(WorldStep& w, const Gather& g, double dt, Vec3 lookahead,
+int64_t gather_pair(StepContext& w, const Gather& g, double dt, Vec3 lookahead,
                     const ContactSet& set, int64_t at) {
     ContactCache& c = w.contacts;
     const int a = w.lists.pair_a[g.k], b = w.lists.pair_b[g.k];
@@ -178,9 +178,9 @@ int64_t gather_pair(WorldStep& w, const Gather& g, double dt, Vec3 lookahead,
     return written;
 }
 
-int64_t contact_rows_needed(const WorldStep& w) { return *w.contacts.needed; }
+int64_t contact_rows_needed(const StepContext& w) { return *w.contacts.needed; }
 
-bool pool_overflowed(const WorldStep& w) {
+bool pool_overflowed(const StepContext& w) {
     return *w.contacts.detected && *w.contacts.needed > *w.contacts.used;
 }
 

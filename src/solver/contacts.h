@@ -53,7 +53,7 @@ constexpr double GRAPH_MARGIN = 1e-4;
 
 // Find every listed pair's contacts at the predicted poses (displacement lookahead + dt V for
 // dynamic bodies, dt V for kinematic ones; lookahead in m), within SPECULATIVE_MARGIN.
-void detect_contacts(WorldStep& w, int64_t pairs, double dt, Vec3 lookahead);
+void detect_contacts(StepContext& w, int64_t pairs, double dt, Vec3 lookahead);
 
 // What gather_pair writes: pair k's contacts whose depth is above `threshold` (m), into set
 // from row `at`, as contacts of body `body` (one of the pair's) against the other.
@@ -67,15 +67,15 @@ struct Gather {
 // towards g.body, partner the other body, source k, orient +1 if body is the pair's a, -1 if
 // its b, the two bodies' predicted centres. Returns how many there are: more than fit means
 // the set is too small and only what fitted was written (the caller resolves the pair alone).
-int64_t gather_pair(WorldStep& w, const Gather& g, double dt, Vec3 lookahead,
+int64_t gather_pair(StepContext& w, const Gather& g, double dt, Vec3 lookahead,
                     const ContactSet& set, int64_t at);
 
 // Contacts found, and their rows, per world: what the pool should hold in the next step.
-int64_t contact_rows_needed(const WorldStep& w);
+int64_t contact_rows_needed(const StepContext& w);
 
 // Did some pair's contacts not fit the pool in this step? Its stages then ran with that pair
 // found anew in every pass (gather_pair), which rounds differently: the step must be run
 // again once the pool has grown.
-bool pool_overflowed(const WorldStep& w);
+bool pool_overflowed(const StepContext& w);
 
 }  // namespace rg

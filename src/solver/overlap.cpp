@@ -17,7 +17,7 @@ constexpr int OVERLAP_ITERATIONS = 4;
 // Called before the position update: the contacts' separations at the final velocities are
 // those after it, and the shifts found are added to the positions at once (the update then
 // adds dt V, the same sum).
-void correct_overlap(WorldStep& w, int64_t pairs, double dt, double fraction) {
+void correct_overlap(StepContext& w, int64_t pairs, double dt, double fraction) {
     const ContactSet& set = w.scratch;
     const Span<Vec3> shift = w.overlap_shift;
     for (int i = 0; i < w.num_bodies(); ++i) {

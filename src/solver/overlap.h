@@ -28,6 +28,6 @@ constexpr double OVERLAP_SLOP = 1e-4;
 
 // Push apart the first `pairs` listed pairs' contacts that overlap by more than OVERLAP_SLOP,
 // each by `fraction` (in (0, 1]) of the excess per step (Settings::overlap_correction).
-void correct_overlap(WorldStep& w, int64_t pairs, double dt, double fraction);
+void correct_overlap(StepContext& w, int64_t pairs, double dt, double fraction);
 
 }  // namespace rg

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace rg {
 
@@ -103,7 +104,7 @@ bool solve_dense(Matrix6& m, double* rhs, int size, double* out) {
 // |d|; exact for the segments and rectangles of box faces and edges up to a slight leniency
 // near the corners of a rectangle).
 bool centre_of_pressure_inside(const ContactSet& set, int64_t seed, int64_t count, Vec3 c, Vec3 d) {
-    const double len = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    const double len = length(d);
     if (len == 0.0) {
         return true;
     }
@@ -111,7 +112,7 @@ bool centre_of_pressure_inside(const ContactSet& set, int64_t seed, int64_t coun
     for (int64_t i = seed; i < count; ++i) {
         if (set.group[i] == seed) {
             const Vec3 p = set.point[i];
-            reach = std::max(reach, ((p.x - c.x) * d.x + (p.y - c.y) * d.y + (p.z - c.z) * d.z) / len);
+            reach = std::max(reach, dot(sub(p, c), d) / len);
         }
     }
     return len <= reach;
@@ -131,14 +132,12 @@ PatchKind patch_shape(const ContactSet& set, int64_t seed, int64_t count, Vec3 c
     int m = 0;
     for (int64_t i = seed; i < count; ++i) {
         if (set.group[i] == seed) {
-            const Vec3 p = set.point[i];
-            const Vec3 q = {p.x - c.x, p.y - c.y, p.z - c.z};
-            const double u = q.x * t1.x + q.y * t1.y + q.z * t1.z;
-            const double v = q.x * t2.x + q.y * t2.y + q.z * t2.z;
+            const Vec3 q = sub(set.point[i], c);
+            const double u = dot(q, t1), v = dot(q, t2);
             sxx += u * u;
             sxy += u * v;
             syy += v * v;
-            radius += std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z);
+            radius += length(q);
             m += 1;
         }
     }
@@ -157,7 +156,7 @@ PatchKind patch_shape(const ContactSet& set, int64_t seed, int64_t count, Vec3 c
     }
     const double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
     const double ca = std::cos(angle), sa = std::sin(angle);
-    direction = {ca * t1.x + sa * t2.x, ca * t1.y + sa * t2.y, ca * t1.z + sa * t2.z};
+    direction = add(scale(ca, t1), scale(sa, t2));
     return EDGE;
 }
 
@@ -399,7 +398,7 @@ bool solve_sliding(const Matrix6& big, const Vec3* d, int tips, Vec3 s, Vec3 n, 
     sliding_system(big, d, tips, s, n, system);
     rhs[0] = target.normal - vn;
     for (int k = 0; k < tips; ++k) {
-        rhs[1 + k] = target.tip[k] - (w.x * d[k].x + w.y * d[k].y + w.z * d[k].z);
+        rhs[1 + k] = target.tip[k] - dot(w, d[k]);
     }
     if (!solve_dense(system, rhs, 1 + tips, sol)) {
         return false;
@@ -465,12 +464,29 @@ void apply_with_spin_friction(const BodyStates& bodies, const BodyModel& model, 
     apply_pair(bodies, model, a, b, movable, j, m, ra, rb);
 }
 
-PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int a, int b,
-                          Movable movable, const ContactSet& set, int64_t seed, int64_t count,
-                          double e, double mu, Vec3 prior, double dt) {
-    const PatchResult unresolved = {UNRESOLVED, {0.0, 0.0, 0.0}};
-    const PatchResult at_rest = {AT_REST, {0.0, 0.0, 0.0}};
-    // geometric centroid and mean normal of the patch
+namespace {
+
+// The largest of |x|, |y|, |z|.
+double max_abs(Vec3 a) { return std::max(std::max(std::fabs(a.x), std::fabs(a.y)), std::fabs(a.z)); }
+
+// The patch seen from its centre: geometry, the rotations it constrains and the pair's
+// relative motion there.
+struct PatchFrame {
+    Vec3 c, n;         // geometric centroid and mean normal (unit) of the patch's points
+    Vec3 t1, t2;       // tangent basis
+    Vec3 edge;         // an edge's direction
+    double rho;        // m, the mean distance of the points from c
+    Vec3 d[3];         // the constrained rotations: tip axes first, spin about n last
+    int tips;          // 2 for a face, 1 for an edge
+    Vec3 ra, rb;       // m, c from each body's predicted centre
+    Vec3 v, w;         // relative velocity at c (m/s) and relative angular velocity (rad/s)
+    double vn;         // v . n
+};
+
+// The frame of the patch whose contacts have group == seed; false for a single point (fewer
+// than two contacts, or all at one place).
+bool patch_frame(const BodyStates& bodies, int a, int b, const ContactSet& set, int64_t seed,
+                 int64_t count, PatchFrame& f) {
     Vec3 c = {0.0, 0.0, 0.0}, n = {0.0, 0.0, 0.0};
     int m = 0;
     for (int64_t i = seed; i < count; ++i) {
@@ -481,135 +497,164 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
         }
     }
     if (m < 2) {
-        return unresolved;
+        return false;
     }
-    c = {c.x / m, c.y / m, c.z / m};
-    const double norm = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
-    n = {n.x / norm, n.y / norm, n.z / norm};
-    Vec3 t1, t2, edge;
-    tangent_basis(n, t1, t2);
-    double rho;
-    const PatchKind kind = patch_shape(set, seed, count, c, t1, t2, edge, rho);
+    f.c = {c.x / m, c.y / m, c.z / m};
+    const double norm = length(n);
+    f.n = {n.x / norm, n.y / norm, n.z / norm};
+    tangent_basis(f.n, f.t1, f.t2);
+    const PatchKind kind = patch_shape(set, seed, count, f.c, f.t1, f.t2, f.edge, f.rho);
     if (kind == POINT) {
-        return unresolved;
+        return false;
     }
-    // constrained rotations: tip axes first, spin about n last
-    Vec3 d[3];
-    int tips;
     if (kind == FACE) {
-        tips = 2;
-        d[0] = t1;
-        d[1] = t2;
+        f.tips = 2;
+        f.d[0] = f.t1;
+        f.d[1] = f.t2;
     } else {
-        tips = 1;
-        d[0] = cross(n, edge);
+        f.tips = 1;
+        f.d[0] = cross(f.n, f.edge);
     }
-    d[tips] = n;
-    // relative velocity at c and relative angular velocity
-    const Vec3 ra = sub(c, set.centre_a[seed]), rb = sub(c, set.centre_b[seed]);
-    const Vec3 v = relative_point_velocity(bodies, a, b, ra, rb);
-    const double vn = v.x * n.x + v.y * n.y + v.z * n.z;
-    const Vec3 w = sub(bodies.angular_velocity[a], bodies.angular_velocity[b]);
-    const double spin_speed = rho * std::max(std::max(std::fabs(w.x), std::fabs(w.y)), std::fabs(w.z));
-    if (std::max(std::max(std::max(std::fabs(v.x), std::fabs(v.y)), std::fabs(v.z)), spin_speed) <
-        REST_SPEED) {
-        return at_rest;  // nothing to do
-    }
-    // every point approaching no faster than its target (a rod's end closing its gap while the
-    // other end rests): nothing to do. Solved, the wrench would be j_n <= 0, and the fallback
-    // impulse would stop the closing point short.
-    const PairLevers pair = {bodies, model, a, b, movable, set.centre_a[seed], set.centre_b[seed]};
-    const LeverReach lever = lever_reach(pair, set, seed, count, n, dt);
-    bool short_of_target = false;
+    f.d[f.tips] = f.n;
+    f.ra = sub(f.c, set.centre_a[seed]);
+    f.rb = sub(f.c, set.centre_b[seed]);
+    f.v = relative_point_velocity(bodies, a, b, f.ra, f.rb);
+    f.vn = dot(f.v, f.n);
+    f.w = sub(bodies.angular_velocity[a], bodies.angular_velocity[b]);
+    return true;
+}
+
+// Is the patch at rest: every point's relative speed below REST_SPEED?
+bool patch_at_rest(const PatchFrame& f) { return std::max(max_abs(f.v), f.rho * max_abs(f.w)) < REST_SPEED; }
+
+// Does some point approach faster than its target? Not when every point approaches no faster
+// (a rod's end closing its gap while the other end rests): solved, the wrench would be
+// j_n <= 0, and the fallback impulse would stop the closing point short.
+bool short_of_target(const PairLevers& pair, const LeverReach& lever, const ContactSet& set,
+                     int64_t seed, int64_t count, const PatchFrame& f, double e, double dt) {
+    bool short_of = false;
     for (int64_t i = seed; i < count; ++i) {
-        short_of_target = short_of_target ||
-                          (set.group[i] == seed &&
-                           set.depth[i] < point_target(pair, lever, set, i, n, e, dt) - REST_SPEED);
+        short_of = short_of || (set.group[i] == seed &&
+                                set.depth[i] < point_target(pair, lever, set, i, f.n, e, dt) - REST_SPEED);
     }
-    if (!short_of_target) {
-        return at_rest;
-    }
-    Matrix6 big = {};
-    if (movable.a) {
-        add_body_wrench_matrix(model.inverse_mass[a], bodies.inverse_inertia[a], ra, big);
-    }
-    if (movable.b) {
-        add_body_wrench_matrix(model.inverse_mass[b], bodies.inverse_inertia[b], rb, big);
-    }
-    const Targets target =
-        normal_targets(pair, lever, set, seed, count, c, n, t1, t2, edge, tips, d, vn, w, e, dt);
+    return short_of;
+}
+
+// The static wrench: j (3) and a moment along every constrained rotation reaching the targets,
+// applied if it pushes (j_n > 0) and keeps the step's total through the patch (prior + j)
+// inside the friction cone, its spin moment inside mu j_n rho and its centre of pressure
+// inside the patch. Returns APPLIED or UNRESOLVED (it would pull), or nothing where it is not
+// taken (a singular system, or a wrench that would slide): the sliding wrench is next.
+std::optional<PatchResult> static_wrench(const PairLevers& pair, const ContactSet& set, int64_t seed, int64_t count,
+                          const PatchFrame& f, const Matrix6& big, const Targets& target, double mu,
+                          Vec3 prior) {
+    const Vec3 n = f.n, v = f.v;
     Matrix6 system;
     double rhs[6], sol[6];
-    if (mu > 0.0) {
-        // static: j (3) and m along every constrained rotation
-        reduced_system(big, d, tips + 1, system);
-        rhs[0] = -v.x + target.normal * n.x;
-        rhs[1] = -v.y + target.normal * n.y;
-        rhs[2] = -v.z + target.normal * n.z;
-        for (int k = 0; k < tips + 1; ++k) {
-            const double spin = w.x * d[k].x + w.y * d[k].y + w.z * d[k].z;
-            rhs[3 + k] = k == tips ? -spin : target.tip[k] - spin;
-        }
-        if (solve_dense(system, rhs, 3 + tips + 1, sol)) {
-            const Vec3 j = {sol[0], sol[1], sol[2]};
-            const double jn = j.x * n.x + j.y * n.y + j.z * n.z;
-            const Vec3 mo = moment(d, sol, 3, tips + 1);
-            const double mn = mo.x * n.x + mo.y * n.y + mo.z * n.z;
-            if (jn <= 0.0) {
-                return unresolved;
-            }
-            // Coulomb on the step's total through this patch
-            const Vec3 f = add(prior, j);
-            const double fn = f.x * n.x + f.y * n.y + f.z * n.z;
-            const Vec3 t = {f.x - fn * n.x, f.y - fn * n.y, f.z - fn * n.z};
-            if (std::sqrt(t.x * t.x + t.y * t.y + t.z * t.z) <= mu * fn &&
-                std::fabs(mn) <= mu * fn * rho &&
-                pressure_inside(set, seed, count, c, n,
-                                {mo.x - mn * n.x, mo.y - mn * n.y, mo.z - mn * n.z}, fn)) {
-                apply_pair(bodies, model, a, b, movable, j, mo, ra, rb);
-                return {APPLIED, j};
-            }
-        }
+    reduced_system(big, f.d, f.tips + 1, system);
+    rhs[0] = -v.x + target.normal * n.x;
+    rhs[1] = -v.y + target.normal * n.y;
+    rhs[2] = -v.z + target.normal * n.z;
+    for (int k = 0; k < f.tips + 1; ++k) {
+        const double spin = dot(f.w, f.d[k]);
+        rhs[3 + k] = k == f.tips ? -spin : target.tip[k] - spin;
     }
-    // sliding (or frictionless): j = j_n s, s = n - mu T, with the tip constraints only. T is
-    // the direction the patch slides in once the wrench has acted, taken from the frictionless
-    // wrench: the tip constraints can turn the sliding round (a block pushed at its top rocks
-    // its base backwards before they stop the rocking), and friction must oppose the sliding
-    // that is left, not the one before (then it pointed forwards in the push's first step).
-    Vec3 u = {v.x - vn * n.x, v.y - vn * n.y, v.z - vn * n.z};
+    if (!solve_dense(system, rhs, 3 + f.tips + 1, sol)) {
+        return std::nullopt;
+    }
+    const Vec3 j = {sol[0], sol[1], sol[2]};
+    const Vec3 mo = moment(f.d, sol, 3, f.tips + 1);
+    const double mn = dot(mo, n);
+    if (dot(j, n) <= 0.0) {
+        return PatchResult{UNRESOLVED, {0.0, 0.0, 0.0}};
+    }
+    // Coulomb on the step's total through this patch
+    const Vec3 total = add(prior, j);
+    const double fn = dot(total, n);
+    if (length(sub(total, scale(fn, n))) <= mu * fn && std::fabs(mn) <= mu * fn * f.rho &&
+        pressure_inside(set, seed, count, f.c, n, sub(mo, scale(mn, n)), fn)) {
+        apply_pair(pair.bodies, pair.model, pair.a, pair.b, pair.movable, j, mo, f.ra, f.rb);
+        return PatchResult{APPLIED, j};
+    }
+    return std::nullopt;
+}
+
+// The sliding (or frictionless) wrench: j = j_n s, s = n - mu T, with the tip constraints
+// only. T is the direction the patch slides in once the wrench has acted, taken from the
+// frictionless wrench: the tip constraints can turn the sliding round (a block pushed at its
+// top rocks its base backwards before they stop the rocking), and friction must oppose the
+// sliding that is left, not the one before (then it pointed forwards in the push's first
+// step).
+PatchResult sliding_wrench(const PairLevers& pair, const ContactSet& set, int64_t seed,
+                           int64_t count, const PatchFrame& f, const Matrix6& big,
+                           const Targets& target, double mu, Vec3 prior) {
+    const Vec3 n = f.n;
+    Vec3 u = sub(f.v, scale(f.vn, n));
     double jn;
     Vec3 mo;
-    if (mu > 0.0 && solve_sliding(big, d, tips, n, n, target, vn, w, jn, mo) && jn > 0.0) {
-        const Vec3 after = add(v, centre_velocity_change(big, scale(jn, n), mo));
-        const double an = dot(after, n);
-        const Vec3 left = {after.x - an * n.x, after.y - an * n.y, after.z - an * n.z};
-        if (std::max(std::max(std::fabs(left.x), std::fabs(left.y)), std::fabs(left.z)) > REST_SPEED) {
+    if (mu > 0.0 && solve_sliding(big, f.d, f.tips, n, n, target, f.vn, f.w, jn, mo) && jn > 0.0) {
+        const Vec3 after = add(f.v, centre_velocity_change(big, scale(jn, n), mo));
+        const Vec3 left = sub(after, scale(dot(after, n), n));
+        if (max_abs(left) > REST_SPEED) {
             u = left;
         }
     }
-    const double ut = std::sqrt(u.x * u.x + u.y * u.y + u.z * u.z);
+    const double ut = length(u);
     const double friction = ut > 0.0 ? mu : 0.0;
     Vec3 s = n;
     if (friction > 0.0) {
         s = {n.x - friction * u.x / ut, n.y - friction * u.y / ut, n.z - friction * u.z / ut};
     }
-    if (!solve_sliding(big, d, tips, s, n, target, vn, w, jn, mo)) {
-        return unresolved;
+    if (!solve_sliding(big, f.d, f.tips, s, n, target, f.vn, f.w, jn, mo) || jn <= 0.0) {
+        return {UNRESOLVED, {0.0, 0.0, 0.0}};
     }
-    if (jn <= 0.0) {
-        return unresolved;
-    }
+    // summed in this order (jn first): the rounding is the step's
     const double fn = jn + prior.x * n.x + prior.y * n.y + prior.z * n.z;
-    if (!pressure_inside(set, seed, count, c, n, mo, fn)) {
-        return unresolved;
+    if (!pressure_inside(set, seed, count, f.c, n, mo, fn)) {
+        return {UNRESOLVED, {0.0, 0.0, 0.0}};
     }
     const Vec3 j = scale(jn, s);
     if (mu > 0.0) {
-        apply_with_spin_friction(bodies, model, a, b, movable, j, mo, ra, rb, n, mu * jn * rho);
+        apply_with_spin_friction(pair.bodies, pair.model, pair.a, pair.b, pair.movable, j, mo,
+                                 f.ra, f.rb, n, mu * jn * f.rho);
     } else {
-        apply_pair(bodies, model, a, b, movable, j, mo, ra, rb);
+        apply_pair(pair.bodies, pair.model, pair.a, pair.b, pair.movable, j, mo, f.ra, f.rb);
     }
     return {APPLIED, j};
+}
+
+}  // namespace
+
+PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int a, int b,
+                          Movable movable, const ContactSet& set, int64_t seed, int64_t count,
+                          double e, double mu, Vec3 prior, double dt) {
+    PatchFrame f;
+    if (!patch_frame(bodies, a, b, set, seed, count, f)) {
+        return {UNRESOLVED, {0.0, 0.0, 0.0}};
+    }
+    if (patch_at_rest(f)) {
+        return {AT_REST, {0.0, 0.0, 0.0}};  // nothing to do
+    }
+    const PairLevers pair = {bodies, model, a, b, movable, set.centre_a[seed], set.centre_b[seed]};
+    const LeverReach lever = lever_reach(pair, set, seed, count, f.n, dt);
+    if (!short_of_target(pair, lever, set, seed, count, f, e, dt)) {
+        return {AT_REST, {0.0, 0.0, 0.0}};
+    }
+    Matrix6 big = {};
+    if (movable.a) {
+        add_body_wrench_matrix(model.inverse_mass[a], bodies.inverse_inertia[a], f.ra, big);
+    }
+    if (movable.b) {
+        add_body_wrench_matrix(model.inverse_mass[b], bodies.inverse_inertia[b], f.rb, big);
+    }
+    const Targets target = normal_targets(pair, lever, set, seed, count, f.c, f.n, f.t1, f.t2,
+                                          f.edge, f.tips, f.d, f.vn, f.w, e, dt);
+    if (mu > 0.0) {
+        if (const auto held = static_wrench(pair, set, seed, count, f, big, target, mu, prior)) {
+            return *held;
+        }
+    }
+    return sliding_wrench(pair, set, seed, count, f, big, target, mu, prior);
 }
 
 }  // namespace rg

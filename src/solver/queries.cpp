@@ -8,29 +8,22 @@
 
 namespace rg {
 
-std::vector<int32_t> candidate_pairs(StepContext& context, double margin, int w) {
-    const int n = context.num_bodies();
-    const WorldStep s = context.world(w);
-    Array<Aabb> bounds(n);
-    Array<int64_t> order(n);
-    Array<double> reach(n, 0.0);
+std::vector<int32_t> candidate_pairs(Batch& batch, double margin, int w) {
+    const int n = batch.num_bodies();
+    const StepContext s = batch.world(w);
+    PairListBuffers buffers;  // one world's, apart from the batch's
     int64_t capacity = std::max<int64_t>(8, 2 * n);
     while (true) {
-        Array<int32_t> pair_a(capacity), pair_b(capacity);
-        Array<int64_t> keys(capacity), spare(capacity);
-        for (int i = 0; i < n; ++i) {
-            order[i] = i;
-            reach[i] = 0.0;
-        }
-        const PairLists lists = {bounds.span(), order.span(), pair_a.span(), pair_b.span(),
-                                 keys.span(),   spare.span(), reach.span()};
-        const int64_t count = find_world_pairs(context.geometry(), s.model.motion, s.bodies, margin,
-                                               0.0, 0.0, context.settings().sweep, lists);
+        buffers.allocate_bodies(1, n);  // order 0..n-1, no reach
+        buffers.allocate_pairs(1, capacity);
+        const PairLists lists = buffers.rows(0);
+        const int64_t count = find_world_pairs(batch.geometry(), s.model.motion, s.bodies, margin,
+                                               0.0, 0.0, batch.settings().sweep, lists);
         if (count <= capacity) {
             std::vector<int32_t> pairs(2 * count);
             for (int64_t k = 0; k < count; ++k) {
-                pairs[2 * k] = pair_a[k];
-                pairs[2 * k + 1] = pair_b[k];
+                pairs[2 * k] = lists.pair_a[k];
+                pairs[2 * k + 1] = lists.pair_b[k];
             }
             return pairs;
         }
@@ -38,15 +31,15 @@ std::vector<int32_t> candidate_pairs(StepContext& context, double margin, int w)
     }
 }
 
-ContactRows detect_contacts(StepContext& context, double margin, int first, int last) {
-    const Geometry& geo = context.geometry();
+ContactRows detect_contacts(Batch& batch, double margin, int first, int last) {
+    const Geometry& geo = batch.geometry();
     margin += CLOSED_GAP;  // resting contacts: touching to round-off, as the solver counts them
     ContactRows rows;
     Array<Vec3> point(64), normal(64);
     Array<double> depth(64);
     for (int w = first; w < last; ++w) {
-        const WorldStep s = context.world(w);
-        const std::vector<int32_t> pairs = candidate_pairs(context, margin, w);
+        const StepContext s = batch.world(w);
+        const std::vector<int32_t> pairs = candidate_pairs(batch, margin, w);
         for (size_t k = 0; k < pairs.size(); k += 2) {
             const int a = pairs[k], b = pairs[k + 1];
             const Pose pa = {s.bodies.position[a], s.bodies.rotation[a]};

@@ -11,7 +11,7 @@ namespace rg {
 
 // World w's candidate pairs at its current poses (dt = 0), boxes grown by margin (m): 2 body
 // indices (a, b) per pair, in the broad phase's order.
-std::vector<int32_t> candidate_pairs(StepContext& context, double margin, int w);
+std::vector<int32_t> candidate_pairs(Batch& batch, double margin, int w);
 
 // Contacts as flat rows over worlds [first, last), deepest first within each pair: every
 // point of one body inside another or touching it (depth > -CLOSED_GAP, patch.h: a body
@@ -22,6 +22,6 @@ struct ContactRows {
     std::vector<double> point, normal, depth;  // point and normal: 3 per row
 };
 
-ContactRows detect_contacts(StepContext& context, double margin, int first, int last);
+ContactRows detect_contacts(Batch& batch, double margin, int first, int last);
 
 }  // namespace rg

@@ -41,10 +41,10 @@ constexpr double GRAPH_REACH = SPECULATIVE_MARGIN;
 // Which pairs are within GRAPH_REACH at the predicted poses (graph.touching) and the
 // support edges between their bodies (lower to upper, both ways for side contacts), judged by
 // the pair's deepest contact; returns the number of edges.
-int64_t build_contact_graph(WorldStep& w, int64_t pairs, double dt) {
+int64_t build_contact_graph(StepContext& w, int64_t pairs, double dt) {
     const Graph& graph = w.graph;
     const ContactSet& scratch = w.scratch;
-    const Vec3 up = w.settings->up;
+    const Vec3 up = w.up;
     int64_t edges = 0;
     for (int64_t k = 0; k < pairs; ++k) {
         const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
@@ -79,7 +79,7 @@ int64_t build_contact_graph(WorldStep& w, int64_t pairs, double dt) {
 // at once: their contacts (normals turned towards the body) go into w.wide and are resolved
 // as patches, so a box straddling two frozen boxes is held by both (one support alone could
 // hold it only with its centre of pressure on an edge).
-int resolve_supported_body(WorldStep& w, int64_t node, int64_t current, double dt) {
+int resolve_supported_body(StepContext& w, int64_t node, int64_t current, double dt) {
     const Graph& graph = w.graph;
     const ContactSet& wide = w.wide;
     const int body = static_cast<int>(graph.nodes[node]);
@@ -104,7 +104,7 @@ int resolve_supported_body(WorldStep& w, int64_t node, int64_t current, double d
 }
 
 // resolve_supported_body for nodes by_level[start:end] of level `current`; impulses applied.
-int resolve_level_supports(WorldStep& w, int64_t start, int64_t end, int64_t current, double dt) {
+int resolve_level_supports(StepContext& w, int64_t start, int64_t end, int64_t current, double dt) {
     int applied = 0;
     for (int64_t s = start; s < end; ++s) {
         applied += resolve_supported_body(w, w.graph.by_level[s], current, dt);
@@ -114,7 +114,7 @@ int resolve_level_supports(WorldStep& w, int64_t start, int64_t end, int64_t cur
 
 // The levels of the m nodes in order, each against its frozen supports, then its inside
 // pairs (see top).
-void resolve_levels(WorldStep& w, int64_t m, double dt) {
+void resolve_levels(StepContext& w, int64_t m, double dt) {
     const Graph& graph = w.graph;
     int64_t start = 0;
     while (start < m) {
@@ -153,7 +153,7 @@ void resolve_levels(WorldStep& w, int64_t m, double dt) {
 // built? Its bodies overlap at the predicted poses now, and the graph ordered them by
 // nothing: the lower one, pushed up off its supports, runs into a body that was falling
 // just above it, and a body processed earlier is not stopped by one processed later.
-bool brought_together(WorldStep& w, int64_t pairs, double dt) {
+bool brought_together(StepContext& w, int64_t pairs, double dt) {
     for (int64_t k = 0; k < pairs; ++k) {
         if (!w.graph.touching[k] &&
             gather_pair(w, {k, w.lists.pair_a[k], 0.0}, dt, NO_LOOKAHEAD, w.scratch, 0) > 0) {
@@ -165,7 +165,7 @@ bool brought_together(WorldStep& w, int64_t pairs, double dt) {
 
 }  // namespace
 
-void propagate_world_shock(WorldStep& w, int64_t pairs, double dt) {
+void propagate_world_shock(StepContext& w, int64_t pairs, double dt) {
     const Graph& graph = w.graph;
     const int64_t m = graph_nodes(graph, w.lists, pairs, w.num_bodies());
     for (int round = 0; round < SHOCK_ROUNDS; ++round) {

@@ -2,7 +2,6 @@
 #include "solver/sleep.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstring>
 
 namespace rg {
@@ -69,7 +68,7 @@ bool pushed(const BodyStates& bodies, int i) {
 // Each dynamic body's time below Settings::sleep_speed (|V| + |omega| reach, the fastest any
 // of its points can move) after a step of dt s, counted from zero again in an island that
 // was disturbed (rest.slow clear).
-void count_slow_time(WorldStep& w, double dt) {
+void count_slow_time(StepContext& w, double dt) {
     const BodyStates& s = w.bodies;
     const Rest& rest = w.rest;
     const double sleep_speed = w.settings->sleep_speed;
@@ -83,9 +82,11 @@ void count_slow_time(WorldStep& w, double dt) {
     }
 }
 
-Span<const double> snapshot_of(const Rest& rest, int i) {
-    const Span<double> row = rest.snapshot.sub(static_cast<int64_t>(i) * SNAPSHOT, SNAPSHOT);
-    return {row.data, row.size};
+// Is body i as it was at the start of the last step: its snapshot a fixed point's (not
+// stale) and its state that snapshot bit for bit?
+bool same_as_last_start(const StepContext& w, int i) {
+    const Span<double> row = w.rest.snapshot.sub(static_cast<int64_t>(i) * SNAPSHOT, SNAPSHOT);
+    return !w.rest.stale[i] && unchanged(w.bodies, i, {row.data, row.size});
 }
 
 // The root of body i's island in the union-find forest rest.island, halving the path.
@@ -102,7 +103,7 @@ int64_t root_of(Span<int64_t> parent, int64_t i) {
 // on the order of the unions, so an island of the last step whose bodies are all kept
 // (rest.intact) starts joined under its name: its pairs among themselves are the last step's,
 // which joined them then, and only pairs with a body not kept are joined again.
-void find_islands(WorldStep& w, int64_t count) {
+void find_islands(StepContext& w, int64_t count) {
     const Rest& rest = w.rest;
     const Span<const int32_t> motion = w.model.motion;
     const int n = w.num_bodies();
@@ -157,7 +158,7 @@ void find_islands(WorldStep& w, int64_t count) {
 // list is two runs sorted by key (a n + b), its awake pairs and its asleep ones
 // (move_asleep_last keeps each in order), and an asleep island's pairs were all listed then;
 // the asleep pairs are sorted by key too, so one walk through each run finds them all.
-void carry_impulses(WorldStep& w, int64_t awake, int64_t count) {
+void carry_impulses(StepContext& w, int64_t awake, int64_t count) {
     const Rest& rest = w.rest;
     const int64_t n = w.num_bodies();
     int64_t at[2] = {0, *rest.previous_awake};
@@ -187,7 +188,7 @@ void carry_impulses(WorldStep& w, int64_t awake, int64_t count) {
 // an undisturbed island whose every body has been that slow for SLEEP_TIME is stopped, its
 // velocities zeroed, and sleeps (rest.slow stays set only for those, and for the exact fixed
 // points of rest.resting).
-void stop_slow_islands(WorldStep& w, double dt) {
+void stop_slow_islands(StepContext& w, double dt) {
     const BodyStates& s = w.bodies;
     const Span<const int32_t> motion = w.model.motion;
     const Rest& rest = w.rest;
@@ -215,8 +216,7 @@ void stop_slow_islands(WorldStep& w, double dt) {
 
 }  // namespace
 
-void mark_kept(WorldStep& w, double dt) {
-    const BodyStates& s = w.bodies;
+void mark_kept(StepContext& w, double dt) {
     const Span<const int32_t> motion = w.model.motion;
     const Rest& rest = w.rest;
     const bool same_dt = *rest.previous_dt == dt;
@@ -224,11 +224,11 @@ void mark_kept(WorldStep& w, double dt) {
         const bool candidate =
             same_dt && (motion[i] != DYNAMIC ||
                         (rest.asleep[i] && rest.previous_island[i] >= 0 && rest.resting[rest.island[i]]));
-        rest.kept[i] = candidate && unchanged(s, i, snapshot_of(rest, i));
+        rest.kept[i] = candidate && same_as_last_start(w, i);
     }
 }
 
-void mark_asleep(WorldStep& w, int64_t count, double dt) {
+void mark_asleep(StepContext& w, int64_t count, double dt) {
     const BodyStates& s = w.bodies;
     const Span<const int32_t> motion = w.model.motion;
     const Rest& rest = w.rest;
@@ -253,7 +253,7 @@ void mark_asleep(WorldStep& w, int64_t count, double dt) {
         if (rest.previous_island[i] != r || w.attached.parent[i] >= 0 || pushed(s, i)) {
             rest.slow[r] = 0;
         }
-        if (rest.resting[r] && !rest.kept[i] && !unchanged(s, i, snapshot_of(rest, i))) {
+        if (rest.resting[r] && !rest.kept[i] && !same_as_last_start(w, i)) {
             rest.resting[r] = 0;
         }
     }
@@ -261,14 +261,13 @@ void mark_asleep(WorldStep& w, int64_t count, double dt) {
     // none changed (each one kept is unchanged), and the pairs need no walk
     bool partner_changed = false;
     for (int i = 0; i < n; ++i) {
-        partner_changed = partner_changed || (motion[i] != DYNAMIC && !rest.kept[i] &&
-                                              !unchanged(s, i, snapshot_of(rest, i)));
+        partner_changed =
+            partner_changed || (motion[i] != DYNAMIC && !rest.kept[i] && !same_as_last_start(w, i));
     }
     for (int64_t k = 0; partner_changed && k < count; ++k) {
         const int b = w.lists.pair_b[k];
         const int64_t r = rest.island[w.lists.pair_a[k]];
-        if (rest.slow[r] && motion[b] != DYNAMIC && !rest.kept[b] &&
-            !unchanged(s, b, snapshot_of(rest, b))) {
+        if (rest.slow[r] && motion[b] != DYNAMIC && !rest.kept[b] && !same_as_last_start(w, b)) {
             rest.slow[r] = 0;
         }
     }
@@ -292,12 +291,10 @@ void mark_asleep(WorldStep& w, int64_t count, double dt) {
             // a fixed point's snapshot is its state, just compared; a stopped body's is new
             const Span<double> row = rest.snapshot.sub(static_cast<int64_t>(i) * SNAPSHOT, SNAPSHOT);
             read_state(s, i, row);
-            if (pushed(s, i) || w.attached.parent[i] >= 0) {
-                // this step is not the next one's: a force that holds a body still makes no
-                // fixed point once it stops, nor does a holder once the body is let go (even
-                // by a write to the attachments). A NaN is never unchanged, so the island wakes
-                row[0] = std::nan("");
-            }
+            // this step is not the next one's: a force that holds a body still makes no fixed
+            // point once it stops, nor does a holder once the body is let go (even by a write
+            // to the attachments). A stale snapshot is never unchanged, so the island wakes
+            rest.stale[i] = pushed(s, i) || w.attached.parent[i] >= 0;
         }
         rest.previous_island[i] = rest.island[i];
         rest.previous_bodies[i] = rest.bodies[i];
@@ -310,14 +307,14 @@ void mark_asleep(WorldStep& w, int64_t count, double dt) {
     *rest.previous_dt = dt;
 }
 
-bool still_at_rest(WorldStep& w, double dt) {
+bool still_at_rest(StepContext& w, double dt) {
     const Rest& rest = w.rest;
     if (!*rest.at_rest || *rest.previous_dt != dt) {
         return false;
     }
     bool same = true;
     for (int i = 0; i < w.num_bodies(); ++i) {
-        same &= unchanged(w.bodies, i, snapshot_of(rest, i)) && !pushed(w.bodies, i);
+        same &= same_as_last_start(w, i) && !pushed(w.bodies, i);
     }
     if (same && w.settings->sleep_speed > 0.0) {
         count_slow_time(w, dt);  // every island undisturbed: rest.slow is still set for each
@@ -325,7 +322,7 @@ bool still_at_rest(WorldStep& w, double dt) {
     return same;
 }
 
-int64_t move_asleep_last(WorldStep& w, int64_t count) {
+int64_t move_asleep_last(StepContext& w, int64_t count) {
     // the asleep pairs wait in the spare keys as a << 32 | b: decoded by a shift and a mask,
     // not by two 64-bit divisions a pair (most of this partition's time)
     const Span<int64_t> spare = w.lists.keys;
@@ -348,7 +345,7 @@ int64_t move_asleep_last(WorldStep& w, int64_t count) {
     return awake;
 }
 
-void keep_pair_impulses(WorldStep& w) {
+void keep_pair_impulses(StepContext& w) {
     const Rest& rest = w.rest;
     const int64_t n = w.num_bodies();
     for (int64_t k = 0; k < *w.pair_count; ++k) {
@@ -359,17 +356,16 @@ void keep_pair_impulses(WorldStep& w) {
     *rest.previous_awake = *rest.awake_pairs;
 }
 
-void forget_moved(WorldStep& w) {
+void forget_moved(StepContext& w) {
     const Rest& rest = w.rest;
     for (int i = 0; i < w.num_bodies(); ++i) {
-        if (w.model.motion[i] == DYNAMIC && !rest.asleep[i] &&
-            !unchanged(w.bodies, i, snapshot_of(rest, i))) {
-            rest.snapshot[static_cast<int64_t>(i) * SNAPSHOT] = std::nan("");
+        if (w.model.motion[i] == DYNAMIC && !rest.asleep[i] && !same_as_last_start(w, i)) {
+            rest.stale[i] = 1;
         }
     }
 }
 
-void wake_world(WorldStep& w, int64_t count) {
+void wake_world(StepContext& w, int64_t count) {
     for (int i = 0; i < w.num_bodies(); ++i) {
         w.rest.asleep[i] = 0;
         w.rest.previous_island[i] = -1;

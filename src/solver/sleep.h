@@ -32,7 +32,7 @@
 // and MuJoCo put islands to sleep. Stopped, it is a fixed point of the comparison above and
 // stays asleep until it is disturbed. That changes trajectories, so it is off by default.
 //
-// What the comparison cannot see wakes a world from Python (StepContext::forget): new masses,
+// What the comparison cannot see wakes a world from Python (Batch::forget): new masses,
 // friction or restitution, a reset or load, attaching and detaching. A relist in a step
 // (step.cpp) wakes its world too, and so does a step run again because its contacts
 // overflowed the pool (contacts.h). A growth of the pair buffers wakes nothing: every world
@@ -56,40 +56,40 @@ constexpr double SLEEP_TIME = 0.5;
 // bodies' states and dt, so each such pair is listed as it was then. None after a change of
 // dt or a forgotten world. What a body asleep costs a step is then this comparison; its pairs
 // with a moving body are still tested.
-void mark_kept(WorldStep& w, double dt);
+void mark_kept(StepContext& w, double dt);
 
 // At the start of a step of dt s, after the broad phase (its count pairs; pair_impulse
 // zeroed) and before the step keeps its starting velocities: find the islands, decide which
 // sleep (stopping the slow ones, with Settings::sleep_speed), move their pairs behind the
 // awake ones (rest.awake_pairs says how many those are) with the last step's impulses, and
 // keep this step's islands and states for the next.
-void mark_asleep(WorldStep& w, int64_t count, double dt);
+void mark_asleep(StepContext& w, int64_t count, double dt);
 
 // At the start of a step of dt s, before anything else: is the world still at rest? Every
 // dynamic body slept through the last step (Rest::at_rest), and no body's state changed
 // since that step began, no force or torque acts (an attachment or a change from Python
-// forgets the world: StepContext::forget). Then each island is the fixed point of the
+// forgets the world: Batch::forget). Then each island is the fixed point of the
 // argument above and the step would change nothing: not the states, the listed pairs, their
 // order or impulses. The caller skips the step whole; this only counts each body's time
 // below Settings::sleep_speed on, as the step would. Its cost is the comparison of each
 // body's state with its snapshot. A step of another dt than the last is always run.
-bool still_at_rest(WorldStep& w, double dt);
+bool still_at_rest(StepContext& w, double dt);
 
 // Reorder the count pairs: those without an asleep body first, then those with one, each in
 // their order; returns how many are awake.
-int64_t move_asleep_last(WorldStep& w, int64_t count);
+int64_t move_asleep_last(StepContext& w, int64_t count);
 
-// At the end of the impulse stages: the step's listed pairs and their impulses, for the
+// At the end of a step (after the impulse stages): its listed pairs and their impulses, for the
 // next step's asleep pairs.
-void keep_pair_impulses(WorldStep& w);
+void keep_pair_impulses(StepContext& w);
 
 // At the end of a step: forget the snapshot of every awake dynamic body the step moved. A
 // state equal to the last step's start is a fixed point only if that step left it there:
 // a body put back between steps (set_pose and set_velocity before each step, an impulse
 // that cancels gravity's) starts each step as the last one did, yet each step moves it.
-void forget_moved(WorldStep& w);
+void forget_moved(StepContext& w);
 
 // No body sleeps in the rest of this step (all its count pairs are awake) or in the next.
-void wake_world(WorldStep& w, int64_t count);
+void wake_world(StepContext& w, int64_t count);
 
 }  // namespace rg

@@ -20,7 +20,7 @@ constexpr double SAME_MOTION = 1e-9;
 constexpr double PATCH_COS = 0.95;
 
 // v_a - v_b at contact i's point, each body's lever arm taken from its predicted centre.
-Vec3 relative_velocity(const WorldStep& w, const ContactSet& set, int a, int b, int64_t i) {
+Vec3 relative_velocity(const StepContext& w, const ContactSet& set, int a, int b, int64_t i) {
     const Vec3 p = set.point[i];
     return relative_point_velocity(w.bodies, a, b, sub(p, set.centre_a[i]), sub(p, set.centre_b[i]));
 }
@@ -95,7 +95,7 @@ void approach_weighted_centre(const ContactSet& set, int64_t seed, int64_t count
 
 // What the pairs behind patch seed already transmitted to its body this step (their contacts
 // are contiguous, so each pair is counted once), N s.
-Vec3 prior_impulse(const WorldStep& w, const ContactSet& set, int64_t seed, int64_t count) {
+Vec3 prior_impulse(const StepContext& w, const ContactSet& set, int64_t seed, int64_t count) {
     Vec3 p = {0.0, 0.0, 0.0};
     int64_t last = -1;
     for (int64_t i = seed; i < count; ++i) {
@@ -108,7 +108,7 @@ Vec3 prior_impulse(const WorldStep& w, const ContactSet& set, int64_t seed, int6
 }
 
 // Add impulse j (on the patch's body) to the step total of the seed contact's pair.
-void record_impulse(const WorldStep& w, const ContactSet& set, int64_t seed, Vec3 j) {
+void record_impulse(const StepContext& w, const ContactSet& set, int64_t seed, Vec3 j) {
     Vec3& total = w.pair_impulse[set.source[seed]];
     total = add(total, scale(set.orient[seed], j));
 }
@@ -135,7 +135,7 @@ double closing_restitution(const BodyModel& model, const ContactSet& set, int64_
 }
 
 // COLLISION: the pair's max(e_a, e_b); CONTACT: the ramp value; SHOCK: 0.
-double restitution_for(const WorldStep& w, int a, int b, ImpulseMode mode, double ramp_e) {
+double restitution_for(const StepContext& w, int a, int b, ImpulseMode mode, double ramp_e) {
     if (mode == COLLISION) {
         return std::max(w.model.restitution[a], w.model.restitution[b]);
     }
@@ -144,13 +144,13 @@ double restitution_for(const WorldStep& w, int a, int b, ImpulseMode mode, doubl
 
 // Is the pair (a, b) the only pair of each of its dynamic bodies? (Static and kinematic
 // bodies take no impulse, so the pairs they share carry nothing from one to another.)
-bool alone(const WorldStep& w, int a, int b) {
+bool alone(const StepContext& w, int a, int b) {
     return (w.model.motion[a] != DYNAMIC || w.pairs_of[a] == 1) &&
            (w.model.motion[b] != DYNAMIC || w.pairs_of[b] == 1);
 }
 
 // w.pairs_of over the first `pairs` listed pairs; acting_only: those with an impulse.
-void count_pairs(WorldStep& w, int64_t pairs, bool acting_only) {
+void count_pairs(StepContext& w, int64_t pairs, bool acting_only) {
     for (int i = 0; i < w.num_bodies(); ++i) {
         w.pairs_of[i] = 0;
     }
@@ -166,16 +166,16 @@ void count_pairs(WorldStep& w, int64_t pairs, bool acting_only) {
 
 }  // namespace
 
-void count_pairs_of_bodies(WorldStep& w, int64_t pairs) { count_pairs(w, pairs, false); }
+void count_pairs_of_bodies(StepContext& w, int64_t pairs) { count_pairs(w, pairs, false); }
 
-void count_acting_pairs_of_bodies(WorldStep& w, int64_t pairs) { count_pairs(w, pairs, true); }
+void count_acting_pairs_of_bodies(StepContext& w, int64_t pairs) { count_pairs(w, pairs, true); }
 
 Vec3 collision_lookahead(const BodyModel& model, double dt) {
     const Vec3 g = model.gravity;
     return {dt * dt * g.x, dt * dt * g.y, dt * dt * g.z};
 }
 
-int resolve_pair(WorldStep& w, int64_t k, double dt, Vec3 lookahead, ImpulseMode mode,
+int resolve_pair(StepContext& w, int64_t k, double dt, Vec3 lookahead, ImpulseMode mode,
                  double ramp_e, Movable movable) {
     const int a = w.lists.pair_a[k];
     const ContactSet& set = w.scratch;
@@ -197,7 +197,7 @@ int resolve_pair(WorldStep& w, int64_t k, double dt, Vec3 lookahead, ImpulseMode
 // rocking, and their order biases it sideways. Coulomb's limit applies to the pair's impulse
 // over the whole step: the patch wrench is checked with what its pairs already transmitted
 // this step added, and every impulse applied is added there.
-int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set, int64_t count,
+int resolve_patches(StepContext& w, int a, Movable movable, const ContactSet& set, int64_t count,
                     double dt, ImpulseMode mode, double ramp_e) {
     if (count == 0) {
         return 0;
@@ -282,7 +282,7 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
     return applied;
 }
 
-void resolve_world_contacts(WorldStep& w, int64_t pairs, double dt, ImpulseMode mode, int passes) {
+void resolve_world_contacts(StepContext& w, int64_t pairs, double dt, ImpulseMode mode, int passes) {
     const Vec3 lookahead = mode == COLLISION ? collision_lookahead(w.model, dt) : Vec3{0.0, 0.0, 0.0};
     const bool ramp = mode == CONTACT;
     if (ramp) {

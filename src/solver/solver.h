@@ -20,7 +20,7 @@
 // (resolve_patches): against an immovable partner by the wrench of patch.h, otherwise by one
 // impulse at its centroid. Shock propagation combines a body's contacts with all its frozen
 // supports into such patches. Coulomb's limit applies to each pair's impulse over the whole
-// step (WorldStep::pair_impulse).
+// step (StepContext::pair_impulse).
 #pragma once
 
 #include "solver/patch.h"
@@ -41,18 +41,18 @@ enum ImpulseMode { COLLISION, CONTACT, SHOCK };
 // approach without leaving the body hanging short of its support: as in every pass of the
 // contact and shock stages, a gap that gravity would close within the step is closed
 // (speculative contact, closable in patch.h), which a ramp's early passes did only by chance.
-void resolve_world_contacts(WorldStep& w, int64_t pairs, double dt, ImpulseMode mode, int passes);
+void resolve_world_contacts(StepContext& w, int64_t pairs, double dt, ImpulseMode mode, int passes);
 
 // The shock-propagation stage over the first `pairs` listed pairs (shock.cpp).
-void propagate_world_shock(WorldStep& w, int64_t pairs, double dt);
+void propagate_world_shock(StepContext& w, int64_t pairs, double dt);
 
 // w.pairs_of: in how many of the first `pairs` listed pairs each body is.
-void count_pairs_of_bodies(WorldStep& w, int64_t pairs);
+void count_pairs_of_bodies(StepContext& w, int64_t pairs);
 
 // w.pairs_of: in how many of the first `pairs` listed pairs each body took an impulse this
 // step (w.pair_impulse not zero): the pairs that acted on its motion. A pair listed because
 // two fast bodies' grown boxes meet, whose bodies never touch, does not count.
-void count_acting_pairs_of_bodies(WorldStep& w, int64_t pairs);
+void count_acting_pairs_of_bodies(StepContext& w, int64_t pairs);
 
 // What the collision stage moves dynamic bodies by when predicting their poses: dt^2 g (m).
 Vec3 collision_lookahead(const BodyModel& model, double dt);
@@ -60,12 +60,12 @@ Vec3 collision_lookahead(const BodyModel& model, double dt);
 // Resolve the contacts of listed pair k at their predicted poses (contacts.h, then
 // resolve_patches, from its body a's side); returns the number of impulses applied.
 // COLLISION uses the pair's restitution, CONTACT ramp_e, SHOCK 0.
-int resolve_pair(WorldStep& w, int64_t k, double dt, Vec3 lookahead, ImpulseMode mode,
+int resolve_pair(StepContext& w, int64_t k, double dt, Vec3 lookahead, ImpulseMode mode,
                  double ramp_e, Movable movable);
 
 // Resolve body a's contacts in `set` (normals towards a; each against the body set.partner[i])
 // in stage `mode`; returns the number of impulses applied (solver.cpp says how).
-int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set, int64_t count,
+int resolve_patches(StepContext& w, int a, Movable movable, const ContactSet& set, int64_t count,
                     double dt, ImpulseMode mode, double ramp_e);
 
 }  // namespace rg

@@ -18,22 +18,57 @@ namespace {
 // Times a step's impulse stages may run again with the pairs of the bodies' grown reach.
 constexpr int MAX_RELISTS = 4;
 
+// How a stage leaves the step: go on to the next stage, skip the rest of the step (nothing
+// to do), or give the step up (a buffer was too small: run it again whole once grown).
+enum Flow { NEXT, SKIP, GIVE_UP };
+
+// Whether a stage switched on has work in this step: the impulse stages need awake pairs,
+// overlap correction contacts found in the step.
+bool has_work(const StepContext& w, Stage stage) {
+    switch (stage) {
+        case COLLISION_STAGE:
+        case CONTACT_STAGE:
+        case SHOCK_STAGE:
+            return *w.rest.awake_pairs > 0;
+        case OVERLAP_STAGE:
+            return *w.contacts.detected != 0;
+        default:
+            return true;
+    }
+}
+
+// Run `stage` (its body: Flow body(StepContext&)) if the step's rules switch it on and it has
+// work, counted and timed as one run (timers.h). A run given up for room is timed but not
+// counted: the count is the same whatever the buffers' sizes, which depend on the batch.
+template <class Body>
+Flow run(StepContext& w, Stage stage, Body&& body) {
+    if (!(*w.stages)[stage] || !has_work(w, stage)) {
+        return NEXT;
+    }
+    const StageTimer timer(w.timers, stage);
+    const Flow flow = body(w);
+    if (flow == GIVE_UP) {
+        timer.uncount();
+    }
+    return flow;
+}
+
 // The world's pairs for its current poses and velocities, boxes grown by at least the
 // reach recorded so far; returns how many. acceleration: m/s^2 the bodies may gain (gravity).
 // carried: pairs among the bodies of rest.kept taken from the last step's list (sleep.h):
 // from its asleep pairs, in (a, b) order, which hold every pair of a kept dynamic body (it
 // slept) and no pair of two static or kinematic ones (never listed).
-int64_t list_pairs(WorldStep& w, double dt, double acceleration, bool carried) {
+int64_t list_pairs(StepContext& w, double acceleration, bool carried) {
     const int64_t asleep = *w.rest.previous_awake;
     const Carried known = {{w.rest.kept.data, w.rest.kept.size},
                            {w.rest.previous_keys.data + asleep, *w.rest.previous_count - asleep}};
-    return find_world_pairs(*w.geo, w.model.motion, w.bodies, 0.0, dt, acceleration,
+    return find_world_pairs(*w.geo, w.model.motion, w.bodies, 0.0, w.dt, acceleration,
                             w.settings->sweep, w.lists, carried ? known : Carried{});
 }
 
 // Copy every body's velocity, angular momentum and angular velocity into w.start (keep), or
 // back from it.
-void keep_velocities(WorldStep& w, bool keep) {
+void keep_velocities(StepContext& w, bool keep) {
     const int64_t n = w.num_bodies();
     const BodyStates& s = w.bodies;
     for (int64_t i = 0; i < n; ++i) {
@@ -50,7 +85,7 @@ void keep_velocities(WorldStep& w, bool keep) {
 }
 
 // The bodies asleep in this step (rest.asleep), or none without sleeping.
-Span<const uint8_t> asleep_bodies(const WorldStep& w) {
+Span<const uint8_t> asleep_bodies(const StepContext& w) {
     return w.settings->sleep ? Span<const uint8_t>{w.rest.asleep.data, w.rest.asleep.size}
                              : Span<const uint8_t>{};
 }
@@ -59,11 +94,11 @@ Span<const uint8_t> asleep_bodies(const WorldStep& w) {
 // Called before the position update, which moves a body by its current velocities: no
 // acceleration term (the broad phase's bounds the velocity update's gravity). An asleep body
 // keeps the velocities it started the step with, which its box was grown for.
-bool outgrown(const WorldStep& w, double dt) {
+bool outgrown(const StepContext& w) {
     const bool sleeping = w.settings->sleep;
     for (int i = 0; i < w.num_bodies(); ++i) {
         if (w.geo->body_unbounded[i] == 0 && !(sleeping && w.rest.asleep[i]) &&
-            swept_margin(*w.geo, i, w.bodies.velocity[i], w.bodies.angular_velocity[i], 0.0, dt,
+            swept_margin(*w.geo, i, w.bodies.velocity[i], w.bodies.angular_velocity[i], 0.0, w.dt,
                          0.0) > w.lists.reach[i]) {
             return true;
         }
@@ -71,62 +106,110 @@ bool outgrown(const WorldStep& w, double dt) {
     return false;
 }
 
-void clear_impulses(WorldStep& w, int64_t count) {
+// The step's listed pairs are `count`: give the step up if they do not fit, else make them
+// the impulse stages' (impulses cleared, contacts to be found, every pair awake until the
+// islands are found).
+Flow take_pairs(StepContext& w, int64_t count) {
+    *w.pair_count = count;
+    if (count > w.pair_capacity()) {
+        return GIVE_UP;  // run again once the buffers have grown
+    }
     for (int64_t k = 0; k < count; ++k) {
         w.pair_impulse[k] = {0.0, 0.0, 0.0};  // Coulomb's limit applies to the step's total
     }
+    *w.contacts.detected = 0;
+    *w.rest.awake_pairs = count;
+    return NEXT;
 }
 
 // The step's contacts, found by the first impulse stage that needs them (contacts.h), at
 // the poses it predicts: the collision stage's (old velocities, dt^2 g ahead) or the contact
 // and shock stages' (new velocities), which are the same poses until an impulse or a force
-// acts. Found once per step (the broad phase clears the flag).
-void find_contacts(WorldStep& w, int64_t count, double dt, Vec3 lookahead) {
+// acts. Found once per step (take_pairs clears the flag).
+void find_contacts(StepContext& w, Vec3 lookahead) {
     if (!*w.contacts.detected) {
-        detect_contacts(w, count, dt, lookahead);
+        detect_contacts(w, *w.rest.awake_pairs, w.dt, lookahead);
     }
 }
 
-// The collision, velocity update, contact and shock stages over the first `count` listed
-// pairs (the awake ones, with sleeping), each counted and timed (timers.h) from `since` on;
-// returns where the next stage starts. A stage with nothing to do (no pair, or switched off)
-// is not run.
-double impulse_stages(WorldStep& w, double dt, int64_t count, double since) {
-    const Settings& c = *w.settings;
-    if (c.collision_passes > 0 && count > 0) {
-        find_contacts(w, count, dt, collision_lookahead(w.model, dt));
-        resolve_world_contacts(w, count, dt, COLLISION, c.collision_passes);
-        since = lap(w.timers, COLLISION_STAGE, since);
+// -- the stages, in step order (stages.h) ------------------------------------------------------
+
+// With sleeping: a world still at rest skips its step (sleep.h); else the bodies unchanged
+// since the last step are marked, whose pairs among each other the broad phase carries.
+Flow check_rest(StepContext& w) {
+    if (still_at_rest(w, w.dt)) {
+        return SKIP;
     }
-    update_velocities(w.bodies, w.model, dt, asleep_bodies(w));
-    since = lap(w.timers, VELOCITY_STAGE, since);
-    if (c.contact_passes > 0 && count > 0) {
-        find_contacts(w, count, dt, {0.0, 0.0, 0.0});
-        resolve_world_contacts(w, count, dt, CONTACT, c.contact_passes);
-        since = lap(w.timers, CONTACT_STAGE, since);
-    }
-    if (c.shock_sweeps > 0 && c.gravity > 0.0 && count > 0) {
-        find_contacts(w, count, dt, {0.0, 0.0, 0.0});
-        propagate_world_shock(w, count, dt);
-        since = lap(w.timers, SHOCK_STAGE, since);
-    }
-    return since;
+    mark_kept(w, w.dt);
+    return NEXT;
 }
 
-// After impulse stages whose contacts overflowed the pool: put the velocities back as the
-// stages found them (the impulse stages change nothing else of the bodies) and wake the
-// world, whose sleeping bookkeeping has taken this step in (sleep.h: waking changes no bit).
-// The step is then run again whole, once the pool has grown.
-bool abandoned_for_rows(WorldStep& w) {
+// Held bodies at their place, I^-1 for the step's orientations, and every box's reach
+// cleared but a kept body's (sleep.h: it is as when they were computed).
+Flow prepare(StepContext& w) {
+    const bool sleep = w.settings->sleep;
+    place_attached(w.bodies, w.attached);
+    refresh_inverse_inertia(w.bodies, w.model,
+                            sleep ? Span<const uint8_t>{w.rest.kept.data, w.rest.kept.size}
+                                  : Span<const uint8_t>{});
+    for (int i = 0; i < w.num_bodies(); ++i) {
+        if (!(sleep && w.rest.kept[i])) {
+            w.lists.reach[i] = 0.0;
+        }
+    }
+    return NEXT;
+}
+
+// Every pair whose boxes may meet within the step, velocities and gravity included.
+Flow broad_phase(StepContext& w) { return take_pairs(w, list_pairs(w, w.gravity, w.settings->sleep)); }
+
+// Which islands sleep (sleep.h); may stop slow islands, before the velocities are kept.
+Flow sleep_islands(StepContext& w) {
+    mark_asleep(w, *w.pair_count, w.dt);
+    return NEXT;
+}
+
+Flow collide(StepContext& w) {
+    find_contacts(w, collision_lookahead(w.model, w.dt));
+    resolve_world_contacts(w, *w.rest.awake_pairs, w.dt, COLLISION, w.settings->collision_passes);
+    return NEXT;
+}
+
+Flow velocity_update(StepContext& w) {
+    update_velocities(w.bodies, w.model, w.dt, asleep_bodies(w));
+    return NEXT;
+}
+
+Flow contact(StepContext& w) {
+    find_contacts(w, {0.0, 0.0, 0.0});
+    resolve_world_contacts(w, *w.rest.awake_pairs, w.dt, CONTACT, w.settings->contact_passes);
+    return NEXT;
+}
+
+Flow propagate_shock(StepContext& w) {
+    find_contacts(w, {0.0, 0.0, 0.0});
+    propagate_world_shock(w, *w.rest.awake_pairs, w.dt);
+    return NEXT;
+}
+
+// The collision, velocity update, contact and shock stages over the awake pairs, from the
+// velocities kept in w.start. Where their contacts overflowed the pool, the velocities are
+// put back (the impulse stages change nothing else of the bodies), the world woken (its
+// sleeping bookkeeping has taken this step in: sleep.h; waking changes no bit) and the step
+// given up, to run again whole once the pool has grown (contacts.h).
+Flow impulse_stages(StepContext& w) {
+    keep_velocities(w, true);
+    run(w, COLLISION_STAGE, collide);
+    run(w, VELOCITY_STAGE, velocity_update);
+    run(w, CONTACT_STAGE, contact);
+    run(w, SHOCK_STAGE, propagate_shock);
     if (!pool_overflowed(w)) {
-        return false;
+        return NEXT;
     }
     keep_velocities(w, false);
     wake_world(w, *w.pair_count);
-    return true;
+    return GIVE_UP;
 }
-
-}  // namespace
 
 // The broad phase lists the pairs that can touch if every body keeps its speed through the
 // step (swept_margin), but the impulse stages may speed a body up: a resting box struck by
@@ -134,115 +217,85 @@ bool abandoned_for_rows(WorldStep& w) {
 // its box; if that lists more pairs, the velocities are put back as they were when the
 // impulse stages began and the stages run again with every pair (up to MAX_RELISTS times),
 // so a body is not moved into a neighbour whose pair was never listed. Nothing sleeps then.
-// Each stage counts its runs in the world's timers and, when timed, its time (timers.h): a
-// relisting's time is the broad phase's (not counted as a run: the broad phase runs once per
-// step), the stages run again count as runs of their own.
-int64_t step_world(WorldStep& w, int64_t steps, double dt) {
-    const Settings& c = *w.settings;
-    const int64_t capacity = w.pair_capacity();
-    double since = start_timing(w.timers);
-    for (int64_t done = 0; done < steps; ++done) {
-        if (c.sleep && still_at_rest(w, dt)) {  // nothing to do (sleep.h); not a stage's run
-            since = lap(w.timers, BROAD_STAGE, since, 0);
-            continue;
-        }
-        // 0. broad phase: every pair whose boxes may meet within this step (velocities
-        //    included); held bodies are put at their place first. Counted as a run only when
-        //    it lists pairs (SolverConfig.phases)
-        //    A kept body (sleep.h) keeps its inverse inertia, box and reach: it is as when
-        //    they were computed
-        place_attached(w.bodies, w.attached);
-        if (c.sleep) {
-            mark_kept(w, dt);
-        }
-        const Span<const uint8_t> kept =
-            c.sleep ? Span<const uint8_t>{w.rest.kept.data, w.rest.kept.size} : Span<const uint8_t>{};
-        refresh_inverse_inertia(w.bodies, w.model, kept);
-        for (int i = 0; i < w.num_bodies(); ++i) {
-            if (!(c.sleep && w.rest.kept[i])) {
-                w.lists.reach[i] = 0.0;
+// The impulse stages run again count as runs of their own.
+Flow relist(StepContext& w) {
+    for (int relist = 0; relist < MAX_RELISTS && outgrown(w); ++relist) {
+        const int64_t listed = *w.pair_count;
+        const int64_t more = list_pairs(w, 0.0, false);  // the final velocities
+        if (more == listed) {  // boxes only grow: the same count is the same pairs, in the
+            if (w.settings->sleep) {  // order the impulses were recorded in
+                move_asleep_last(w, listed);
             }
+            return NEXT;
         }
-        const int64_t count = c.broad_phase ? list_pairs(w, dt, c.gravity, c.sleep) : 0;
-        *w.pair_count = count;
-        if (count > capacity) {
-            lap(w.timers, BROAD_STAGE, since, 0);  // run again once the buffers have grown
-            return done;
+        keep_velocities(w, false);
+        wake_world(w, more);
+        if (take_pairs(w, more) == GIVE_UP || impulse_stages(w) == GIVE_UP) {
+            return GIVE_UP;
         }
-        clear_impulses(w, count);
-        *w.contacts.detected = 0;
-        *w.rest.awake_pairs = count;
-        if (c.sleep) {
-            mark_asleep(w, count, dt);  // may stop slow islands: before the velocities are kept
-        }
-        keep_velocities(w, true);
-        since = lap(w.timers, BROAD_STAGE, since, c.broad_phase ? 1 : 0);
-        // 1-4. collision, velocity update, contact, shock propagation
-        since = impulse_stages(w, dt, *w.rest.awake_pairs, since);
-        if (abandoned_for_rows(w)) {
-            return done;
-        }
-        // 5. position update with the final velocities
-        if (c.broad_phase) {
-            for (int relist = 0; relist < MAX_RELISTS && outgrown(w, dt); ++relist) {
-                since = lap(w.timers, POSITION_STAGE, since, 0);
-                const int64_t listed = *w.pair_count;
-                const int64_t more = list_pairs(w, dt, 0.0, false);  // the final velocities
-                if (more == listed) {  // boxes only grow: the same count is the same pairs
-                    if (c.sleep) {     // in the order the impulses were recorded in
-                        move_asleep_last(w, listed);
-                    }
-                    since = lap(w.timers, BROAD_STAGE, since, 0);
-                    break;
-                }
-                *w.pair_count = more;
-                keep_velocities(w, false);
-                wake_world(w, more);
-                if (more > capacity) {
-                    lap(w.timers, BROAD_STAGE, since, 0);
-                    return done;
-                }
-                clear_impulses(w, more);
-                *w.contacts.detected = 0;
-                since = lap(w.timers, BROAD_STAGE, since, 0);
-                since = impulse_stages(w, dt, more, since);
-                if (abandoned_for_rows(w)) {
-                    return done;
-                }
-            }
-        }
-        if (c.sleep) {
-            keep_pair_impulses(w);
-        }
-        if (c.overlap_correction > 0.0 && *w.contacts.detected) {
-            correct_overlap(w, *w.rest.awake_pairs, dt, c.overlap_correction);
-        }
-        // the asleep pairs' bodies are asleep or not dynamic: the position update reads no
-        // count of theirs
-        count_acting_pairs_of_bodies(w, *w.rest.awake_pairs);
-        update_positions(w.bodies, w.model, dt, c.rotation_order, c.keep_energy,
-                         {w.pairs_of.data, w.pairs_of.size},
-                         asleep_bodies(w));
-        for (int i = 0; i < w.num_bodies(); ++i) {
-            w.bodies.force[i] = {0.0, 0.0, 0.0};
-            w.bodies.torque[i] = {0.0, 0.0, 0.0};
-        }
-        if (c.sleep) {
-            forget_moved(w);
-        }
-        since = lap(w.timers, POSITION_STAGE, since);
     }
-    place_attached(w.bodies, w.attached);
-    lap(w.timers, POSITION_STAGE, since, 0);
+    return NEXT;
+}
+
+Flow correct_overlaps(StepContext& w) {
+    correct_overlap(w, *w.rest.awake_pairs, w.dt, w.settings->overlap_correction);
+    return NEXT;
+}
+
+// The position update with the final velocities; forces and torques are spent. The asleep
+// pairs' bodies are asleep or not dynamic: the position update reads no count of theirs.
+Flow position_update(StepContext& w) {
+    const Settings& c = *w.settings;
+    count_acting_pairs_of_bodies(w, *w.rest.awake_pairs);
+    update_positions(w.bodies, w.model, w.dt, c.rotation_order, c.keep_energy,
+                     {w.pairs_of.data, w.pairs_of.size}, asleep_bodies(w));
+    for (int i = 0; i < w.num_bodies(); ++i) {
+        w.bodies.force[i] = {0.0, 0.0, 0.0};
+        w.bodies.torque[i] = {0.0, 0.0, 0.0};
+    }
+    return NEXT;
+}
+
+// What the next step's sleeping compares with (sleep.h).
+Flow record_rest(StepContext& w) {
+    keep_pair_impulses(w);
+    forget_moved(w);
+    return NEXT;
+}
+
+}  // namespace
+
+// Each step runs the stages of stages.h in order, each when the rules switch it on and it has
+// work (run), counted and timed in the world's timers. A step that has to give up (a buffer
+// too small) has applied nothing that its run again would not redo.
+int64_t step_world(StepContext& w, int64_t steps, double dt) {
+    w.dt = dt;
+    for (int64_t done = 0; done < steps; ++done) {
+        if (run(w, SLEEP_CHECK_STAGE, check_rest) == SKIP) {
+            continue;  // at rest: the step would change nothing
+        }
+        run(w, PREPARE_STAGE, prepare);
+        if (run(w, BROAD_STAGE, broad_phase) == GIVE_UP) {
+            return done;
+        }
+        run(w, SLEEP_ISLANDS_STAGE, sleep_islands);
+        if (impulse_stages(w) == GIVE_UP || run(w, RELIST_STAGE, relist) == GIVE_UP) {
+            return done;
+        }
+        run(w, OVERLAP_STAGE, correct_overlaps);
+        run(w, POSITION_STAGE, position_update);
+        run(w, SLEEP_RECORD_STAGE, record_rest);
+    }
+    place_attached(w.bodies, w.attached);  // held bodies where the last step left their holders
     return steps;
 }
 
-void advance(StepContext& context, int64_t steps, double dt) {
-    const int num_worlds = context.num_worlds();
+void advance(Batch& batch, int64_t steps, double dt) {
+    const int num_worlds = batch.num_worlds();
     std::vector<int64_t> done(num_worlds, 0);
     ThreadPool& pool = ThreadPool::instance();
     const bool choice = num_worlds > 1 && pool.size() > 1;  // sharing.h
-    const bool shared = choice && context.sharing.share();
+    const bool shared = choice && batch.sharing.share();
     const double start = choice ? clock_seconds() : 0.0;
     while (true) {
         const int ranges = shared ? std::min(num_worlds, pool.size()) : 1;
@@ -251,23 +304,23 @@ void advance(StepContext& context, int64_t steps, double dt) {
             const int last = static_cast<int>(static_cast<int64_t>(num_worlds) * (range + 1) / ranges);
             for (int w = first; w < last; ++w) {
                 if (done[w] < steps) {
-                    WorldStep rows = context.world(w);
+                    StepContext rows = batch.world(w);
                     done[w] += step_world(rows, steps - done[w], dt);
                 }
             }
         });
-        context.fit_contact_rows();  // the contact pool may grow for the next steps
+        batch.fit_contact_rows();  // the contact pool may grow for the next steps
         if (std::all_of(done.begin(), done.end(), [&](int64_t d) { return d == steps; })) {
             if (choice) {
-                context.sharing.record(shared, clock_seconds() - start, num_worlds * steps);
+                batch.sharing.record(shared, clock_seconds() - start, num_worlds * steps);
             }
             return;
         }
         int64_t needed = 0;
         for (int w = 0; w < num_worlds; ++w) {
-            needed = std::max(needed, context.pair_count[w]);
+            needed = std::max(needed, batch.pair_count[w]);
         }
-        context.grow_pairs(needed);  // an overflowed step was abandoned: it runs again whole
+        batch.grow_pairs(needed);  // an overflowed step was abandoned: it runs again whole
     }
 }
 

@@ -11,13 +11,13 @@ namespace rg {
 // many pairs it needs), or its contact pool was (its velocities were put back and the world
 // woken: contacts.h; contact_rows_needed says how many rows). Forces and torques act during
 // the first step and are cleared by its position update.
-int64_t step_world(WorldStep& w, int64_t steps, double dt);
+int64_t step_world(StepContext& w, int64_t steps, double dt);
 
-// Advance every world of the context by `steps` steps (step_world), on the calling thread or
+// Advance every world of the batch by `steps` steps (step_world), on the calling thread or
 // sharing ranges of worlds out over the thread pool, whichever has been faster for this batch
 // (sharing.h), growing the pair buffers and running again where they were too small. A
 // world's arithmetic is the same whichever range and thread it is in, so results are
 // bit-identical however the worlds are grouped.
-void advance(StepContext& context, int64_t steps, double dt);
+void advance(Batch& batch, int64_t steps, double dt);
 
 }  // namespace rg

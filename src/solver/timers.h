@@ -12,31 +12,9 @@
 #include <cstdint>
 
 #include "base/span.h"
+#include "solver/stages.h"
 
 namespace rg {
-
-// The step's stages, in step order: each one's row in a world's timers.
-enum Stage : int {
-    BROAD_STAGE,
-    COLLISION_STAGE,
-    VELOCITY_STAGE,
-    CONTACT_STAGE,
-    SHOCK_STAGE,
-    POSITION_STAGE,
-    STAGE_COUNT,
-};
-
-// Their names, as World.profile() reports them.
-inline constexpr const char* STAGE_NAMES[STAGE_COUNT] = {
-    "broad_phase", "collision", "update_velocities", "contact", "shock_propagation",
-    "update_positions"};
-
-// One world's timers, accumulated over every step since the world was made.
-struct StageTimers {
-    Span<double> seconds;  // (STAGE_COUNT,) s of wall time, while `timed`
-    Span<int64_t> calls;   // (STAGE_COUNT,) runs of the stage
-    bool timed = false;    // read the clock
-};
 
 // Seconds on a monotonic clock (the origin is arbitrary).
 inline double clock_seconds() {
@@ -44,21 +22,46 @@ inline double clock_seconds() {
         .count();
 }
 
-// Where the first stage starts: the time now, or 0 when not timed.
-inline double start_timing(const StageTimers& timers) {
-    return timers.timed ? clock_seconds() : 0.0;
-}
+// One world's timers, accumulated over every step since the world was made, and the stage
+// running now. A stage's time is its own: a stage run inside another (the impulse stages
+// inside a relisting) stops the outer one's clock until it ends.
+struct StageTimers {
+    Span<double> seconds;     // (STAGE_COUNT,) s of wall time, while `timed`
+    Span<int64_t> calls;      // (STAGE_COUNT,) runs of the stage
+    bool timed = false;       // read the clock
+    int running = -1;         // the stage whose time is counting, -1: none
+    double since = 0.0;       // s, when its time last started counting
 
-// Count `calls` more runs of `stage` and, when timed, charge it the time since `since`
-// (start_timing or the last lap); returns where the next stage starts.
-inline double lap(const StageTimers& timers, Stage stage, double since, int64_t calls = 1) {
-    timers.calls[stage] += calls;
-    if (!timers.timed) {
-        return 0.0;
+    // Charge the time since `since` to the running stage and let `next` run from now.
+    void switch_to(int next) {
+        if (timed) {
+            const double now = clock_seconds();
+            if (running >= 0) {
+                seconds[running] += now - since;
+            }
+            since = now;
+        }
+        running = next;
     }
-    const double now = clock_seconds();
-    timers.seconds[stage] += now - since;
-    return now;
-}
+};
+
+// One run of a stage, counted when made and timed from then until it goes out of scope.
+class StageTimer {
+public:
+    StageTimer(StageTimers& timers, Stage stage) : timers_(timers), stage_(stage), outer_(timers.running) {
+        timers.calls[stage] += 1;
+        timers.switch_to(stage);
+    }
+    ~StageTimer() { timers_.switch_to(outer_); }
+    // Not a run after all (its time still counts): one given up, to run again.
+    void uncount() const { timers_.calls[stage_] -= 1; }
+    StageTimer(const StageTimer&) = delete;
+    StageTimer& operator=(const StageTimer&) = delete;
+
+private:
+    StageTimers& timers_;
+    Stage stage_;
+    int outer_;
+};
 
 }  // namespace rg

@@ -1,7 +1,7 @@
-// StepContext: every buffer the step reads and writes for a batch of B worlds of one scene,
-// and WorldStep, the rows of one world that the stages work on.
+// Batch: every buffer the step reads and writes for a batch of B worlds of one scene, and
+// StepContext, one world's step: its rows that the stages work on.
 //
-// Buffers are allocated when the context is made and reused by every step. The pair buffers
+// Buffers are allocated when the batch is made and reused by every step. The pair buffers
 // (and the shock-propagation graph, sized by them) have a capacity per world that grows
 // between steps when a broad phase finds more pairs than fit (step.cpp): a world's step
 // that overflows is abandoned before anything is applied and run again after the growth.
@@ -16,132 +16,151 @@
 #include "collision/broad_phase.h"
 #include "solver/contact_set.h"
 #include "collision/geometry.h"
+#include "solver/settings.h"
 #include "solver/sharing.h"
+#include "solver/stages.h"
 #include "solver/timers.h"
 
 namespace rg {
-
-// What SolverConfig decides, as the stages take it.
-struct Settings {
-    int collision_passes = 5;  // 0: phase off
-    int contact_passes = 10;   // 0: phase off
-    int shock_sweeps = 2;      // 0: phase off
-    int rotation_order = 2;    // 1, 2 or 3 (integrate.h)
-    bool sweep = false;        // broad phase by sort and sweep (else brute force)
-    bool broad_phase = true;   // whether pairs are listed at all
-    bool sleep = true;         // sleep.h
-    double sleep_speed = 0.0;  // sleep.h: m/s under which a slow island is stopped; 0: exact only
-    bool detect_every_pass = false;  // contacts.h: the narrow phase in every pass
-    bool keep_energy = true;   // integrate.h: rotation update put back on the body's energy
-    double overlap_correction = 1.0;  // overlap.h: fraction of excess overlap removed per step
-    double gravity = 0.0;      // |g|, m/s^2
-    Vec3 up = {0.0, 0.0, 1.0};  // unit vector against gravity
-};
-
-// Shock propagation's work rows (n bodies, P pair capacity).
-struct Graph {
-    // The graph's nodes are the bodies of the stage's pairs (graph_nodes): with sleeping, the
-    // bodies of the awake pairs, so an asleep body costs the stage nothing. Rows marked
-    // "per node" are indexed by node; a node's body is nodes[node].
-    Span<int64_t> nodes;            // (n,) the bodies of the pairs, in index order
-    Span<int64_t> node_of;          // (n,) each body's node, -1 outside the stage
-    Span<uint8_t> touching;         // (P,) the pair touches at the predicted poses
-    Span<int64_t> edge_from;        // (2P,) support edges, lower body to upper
-    Span<int64_t> edge_to;          // (2P,)
-    Span<int64_t> edge_start;       // (n + 1,) CSR form of the edges, per node
-    Span<int64_t> targets;          // (2P,) nodes
-    Span<int64_t> component;        // (n,) per node: Tarjan's strongly connected components
-    Span<int64_t> component_level;  // (n,)
-    Span<int64_t> by_component;     // (n,)
-    Span<int64_t> index;            // (n,) Tarjan's bookkeeping
-    Span<int64_t> low;              // (n,)
-    Span<uint8_t> on_stack;         // (n,)
-    Span<int64_t> stack;            // (n,)
-    Span<int64_t> calls;            // (n,)
-    Span<int64_t> next_edge;        // (n,)
-    Span<int64_t> level;            // (n,) per node: its level, 0 for static and kinematic
-    Span<int64_t> by_level;         // (n,) the nodes by level
-    Span<int64_t> counts;           // (n + 2,) counting sorts
-    Span<int64_t> body_pair_start;  // (n + 1,) each node's touching pairs, CSR
-    Span<int64_t> body_pairs;       // (2P,)
-    Span<int64_t> level_pair_start; // (n + 2,) the touching pairs inside each level, CSR
-    Span<int64_t> level_pairs;      // (P,)
-};
-
-// Sleeping's bookkeeping (sleep.h), kept from step to step. An island is named by its root,
-// the least index of its dynamic bodies; per-island rows are kept at the root's index.
-struct Rest {
-    Span<uint8_t> asleep;             // (n,) skipped by the current step
-    int64_t* awake_pairs;             // how many of the step's listed pairs (the first) are awake
-    Span<int64_t> island;             // (n,) each dynamic body's island, -1 for the others
-    Span<int64_t> previous_island;    // (n,) the same in the last step; -1: forgotten
-    Span<int64_t> bodies;             // (n,) per island: its bodies
-    Span<int64_t> pairs;              // (n,) per island: the listed pairs of its bodies
-    Span<int64_t> previous_bodies;    // (n,) the same two in the last step
-    Span<int64_t> previous_pairs;     // (n,)
-    Span<uint8_t> resting;            // (n,) per island: is it a fixed point (exactly asleep)
-    Span<uint8_t> slow;               // (n,) per island: stopped by sleep_speed
-    Span<double> slow_time;           // (n,) s each body has moved slower than sleep_speed
-    Span<double> snapshot;            // (n * SNAPSHOT,) each body's state at the last step's start
-    Span<int64_t> previous_keys;      // (P,) the last step's listed pairs as a n + b, in order
-    Span<Vec3> previous_impulse;      // (P,) N s, their impulses
-    int64_t* previous_count;          // how many pairs the last step listed
-    int64_t* previous_awake;          // how many of them (the first) were awake
-    int64_t* at_rest;                 // 1: every dynamic body slept through the last step
-    Span<uint8_t> kept;               // (n,) the broad phase carries pairs among these from the
-                                      //      last step's list (mark_kept, sleep.h)
-    Span<uint8_t> intact;             // (n,) per island of the last step: all its bodies kept
-    double* previous_dt;              // s, the last step's dt; 0: none since forgotten
-};
-
-// Contacts found once per step (contacts.h): per listed pair (P,), a pool of rows (Q,), and
-// per body (n,) its pose predicted for them.
-struct ContactCache {
-    Span<int64_t> first;       // (P,) pair k's first row, -1: detected in every pass instead
-    Span<int64_t> count;       // (P,)
-    Span<Vec3> centre_a;       // (P,) m, the pair's bodies' predicted centres at its detection
-    Span<Vec3> centre_b;       // (P,)
-    Span<Vec3> shift_a;        // (P,) m, their predicted displacements then
-    Span<Vec3> shift_b;        // (P,)
-    Span<Vec3> turn_a;         // (P,) rad, their predicted turns then
-    Span<Vec3> turn_b;         // (P,)
-    Span<Vec3> point;          // (Q,) m, world, as found
-    Span<Vec3> normal;         // (Q,) from b to a
-    Span<double> depth;        // (Q,) m, as found
-    Span<Vec3> arm_a;          // (Q,) (point - centre_a) x normal, m
-    Span<Vec3> arm_b;          // (Q,) (point - centre_b) x normal, m
-    int64_t* used;             // rows in use
-    int64_t* needed;           // rows this step asked for (the pool grows to it between steps)
-    int64_t* detected;         // 1 once the step's contacts are found (reset by the broad phase)
-    Span<Pose> pose;           // (n,) each body's predicted pose at the latest detection of
-                               //      every pair, where posed[i] == *detections
-    Span<int64_t> posed;       // (n,)
-    int64_t* detections;       // such detections so far
-};
 
 // Floats of a body's state compared by sleeping: position 3, orientation 4, velocity 3,
 // angular momentum 3, angular velocity 3, rotation 9.
 constexpr int SNAPSHOT = 25;
 
-// One world's rows of every buffer: what a step of that world reads and writes.
-struct WorldStep {
+// The tables below list a per-world struct's rows once (base/span.h): the struct holds a Span
+// of each, Batch an Array of B worlds' rows, which world.cpp allocates, views and grows from
+// the same table. n: bodies, p: the pair capacity, per world.
+
+// Shock propagation's work rows. The graph's nodes are the bodies of the stage's pairs
+// (graph_nodes): with sleeping, the bodies of the awake pairs, so an asleep body costs the
+// stage nothing. Rows "per node" are indexed by node; a node's body is nodes[node].
+#define RG_GRAPH_ROWS(X)                                                                    \
+    X(int64_t, nodes, n, 0)                /* the bodies of the pairs, in index order */    \
+    X(int64_t, node_of, n, -1)             /* each body's node, -1 outside the stage */     \
+    X(uint8_t, touching, p, 0)             /* the pair touches at the predicted poses */    \
+    X(int64_t, edge_from, 2 * p, 0)        /* support edges, lower body to upper */         \
+    X(int64_t, edge_to, 2 * p, 0)                                                           \
+    X(int64_t, edge_start, n + 1, 0)       /* CSR form of the edges, per node */            \
+    X(int64_t, targets, 2 * p, 0)          /* nodes */                                      \
+    X(int64_t, component, n, 0)            /* per node: strongly connected components */   \
+    X(int64_t, component_level, n, 0)                                                       \
+    X(int64_t, by_component, n, 0)                                                          \
+    X(int64_t, index, n, 0)                /* Tarjan's bookkeeping */                       \
+    X(int64_t, low, n, 0)                                                                   \
+    X(uint8_t, on_stack, n, 0)                                                              \
+    X(int64_t, stack, n, 0)                                                                 \
+    X(int64_t, calls, n, 0)                                                                 \
+    X(int64_t, next_edge, n, 0)                                                             \
+    X(int64_t, level, n, 0)                /* per node: its level, 0 static and kinematic */ \
+    X(int64_t, by_level, n, 0)             /* the nodes by level */                         \
+    X(int64_t, counts, n + 2, 0)           /* counting sorts */                             \
+    X(int64_t, body_pair_start, n + 1, 0)  /* each node's touching pairs, CSR */            \
+    X(int64_t, body_pairs, 2 * p, 0)                                                        \
+    X(int64_t, level_pair_start, n + 2, 0) /* the touching pairs inside each level, CSR */  \
+    X(int64_t, level_pairs, p, 0)
+
+struct Graph {
+    RG_GRAPH_ROWS(RG_SPAN_FIELD)
+};
+
+// Sleeping's bookkeeping (sleep.h), kept from step to step. An island is named by its root,
+// the least index of its dynamic bodies; per-island rows are kept at the root's index.
+// Per body (n), allocated once:
+#define RG_REST_BODY_ROWS(X)                                                                 \
+    X(int64_t, island, n, -1)         /* each dynamic body's island, -1 for the others */    \
+    X(int64_t, previous_island, n, -1) /* the same in the last step; -1: forgotten */        \
+    X(int64_t, bodies, n, 0)          /* per island: its bodies */                           \
+    X(int64_t, pairs, n, 0)           /* per island: the listed pairs of its bodies */       \
+    X(int64_t, previous_bodies, n, 0) /* the same two in the last step */                    \
+    X(int64_t, previous_pairs, n, 0)                                                         \
+    X(uint8_t, resting, n, 0)         /* per island: is it a fixed point (exactly asleep) */ \
+    X(uint8_t, slow, n, 0)            /* per island: stopped by sleep_speed */               \
+    X(double, slow_time, n, 0.0)      /* s each body has moved slower than sleep_speed */    \
+    X(double, snapshot, n * SNAPSHOT, 0.0) /* each body's state at the last step's start */  \
+    X(uint8_t, stale, n, 0)           /* the snapshot is no fixed point's: never unchanged */ \
+    X(uint8_t, kept, n, 0)            /* the broad phase carries pairs among these (mark_kept) */ \
+    X(uint8_t, intact, n, 0)          /* per island of the last step: all its bodies kept */
+// Per pair (P), kept through a growth of the pair buffers:
+#define RG_REST_PAIR_ROWS(X)                                                                 \
+    X(int64_t, previous_keys, p, 0)   /* the last step's listed pairs as a n + b, in order */ \
+    X(Vec3, previous_impulse, p, Vec3{}) /* N s, their impulses */
+// One per world:
+#define RG_REST_COUNTS(X)                                                                    \
+    X(int64_t, awake_pairs, 1, 0)     /* how many of the step's listed pairs (the first) are awake */ \
+    X(int64_t, previous_count, 1, 0)  /* how many pairs the last step listed */              \
+    X(int64_t, previous_awake, 1, 0)  /* how many of them (the first) were awake */          \
+    X(int64_t, at_rest, 1, 0)         /* 1: every dynamic body slept through the last step */ \
+    X(double, previous_dt, 1, 0.0)    /* s, the last step's dt; 0: none since forgotten */
+
+struct Rest {
+    Span<uint8_t> asleep;  // (n,) skipped by the current step (Batch::asleep)
+    RG_REST_BODY_ROWS(RG_SPAN_FIELD)
+    RG_REST_PAIR_ROWS(RG_SPAN_FIELD)
+    RG_REST_COUNTS(RG_POINTER_FIELD)
+};
+
+// Contacts found once per step (contacts.h): per listed pair (p), a pool of rows (q), and
+// per body (n) its pose predicted for them.
+#define RG_CACHE_PAIR_ROWS(X)                                                                \
+    X(int64_t, first, p, -1)      /* pair k's first row, -1: detected in every pass instead */ \
+    X(int64_t, count, p, 0)                                                                  \
+    X(Vec3, centre_a, p, Vec3{})  /* m, the pair's bodies' predicted centres at detection */ \
+    X(Vec3, centre_b, p, Vec3{})                                                             \
+    X(Vec3, shift_a, p, Vec3{})   /* m, their predicted displacements then */                \
+    X(Vec3, shift_b, p, Vec3{})                                                              \
+    X(Vec3, turn_a, p, Vec3{})    /* rad, their predicted turns then */                      \
+    X(Vec3, turn_b, p, Vec3{})
+#define RG_CACHE_POOL_ROWS(X)                                                                \
+    X(Vec3, point, q, Vec3{})     /* m, world, as found */                                   \
+    X(Vec3, normal, q, Vec3{})    /* from b to a */                                          \
+    X(double, depth, q, 0.0)      /* m, as found */                                          \
+    X(Vec3, arm_a, q, Vec3{})     /* (point - centre_a) x normal, m */                       \
+    X(Vec3, arm_b, q, Vec3{})     /* (point - centre_b) x normal, m */
+#define RG_CACHE_BODY_ROWS(X)                                                                \
+    X(Pose, pose, n, Pose{})      /* predicted pose at the latest detection of every pair, */ \
+                                  /* where posed[i] == *detections */                        \
+    X(int64_t, posed, n, -1)
+#define RG_CACHE_COUNTS(X)                                                                   \
+    X(int64_t, used, 1, 0)        /* rows in use */                                          \
+    X(int64_t, needed, 1, 0)      /* rows this step asked for (grown to between steps) */    \
+    X(int64_t, detected, 1, 0)    /* 1 once the step's contacts are found */                 \
+    X(int64_t, detections, 1, 0)  /* such detections so far */
+
+struct ContactCache {
+    RG_CACHE_PAIR_ROWS(RG_SPAN_FIELD)
+    RG_CACHE_POOL_ROWS(RG_SPAN_FIELD)
+    RG_CACHE_BODY_ROWS(RG_SPAN_FIELD)
+    RG_CACHE_COUNTS(RG_POINTER_FIELD)
+};
+
+// The step's own rows (step.cpp, solver.h, overlap.h), n bodies.
+#define RG_STEP_ROWS(X)                                                                       \
+    X(Vec3, start, 3 * n, Vec3{})   /* velocity, angular momentum and angular velocity when */ \
+                                    /* the impulse stages began (restored to rerun them) */    \
+    X(int64_t, pairs_of, n, 0)      /* in how many listed pairs each body is */               \
+    X(Vec3, overlap_shift, n, Vec3{}) /* m, overlap.h's position corrections */
+
+// One world's step: its rows of every buffer, the step's dt and the stages it runs (Box2D's
+// b2StepContext). Batch::world makes one for each world a call steps.
+struct StepContext {
     const Geometry* geo;
     const Settings* settings;
+    const StageSwitches* stages;  // stage_rules of the settings and the scene's gravity
+    double dt = 0.0;              // s, the step's
+    double gravity = 0.0;         // |g|, m/s^2
+    Vec3 up = {0.0, 0.0, 1.0};    // unit vector against gravity
     BodyStates bodies;
     BodyModel model;
     Attachments attached;
     PairLists lists;
     int64_t* pair_count;     // may exceed the capacity: the buffers are too small
     Span<Vec3> pair_impulse;  // (P,) N s, each pair's impulse on its body a in the current step
-    Span<Vec3> start;        // (3 n,) velocity, angular momentum and angular velocity when
-                             //        the step's impulse stages began (restored to rerun them)
+    RG_STEP_ROWS(RG_SPAN_FIELD)
     ContactCache contacts;   // the step's contacts, found once
     Span<const double> body_reach;  // (n,) m, the largest distance of a body's point from its
                                     //      centre (bounded bodies; 0 for planes)
     ContactSet scratch;      // one pair's contacts (C, the pair contact capacity)
     ContactSet wide;         // one body's contacts with all its frozen supports
-    Span<int64_t> pairs_of;  // (n,) in how many listed pairs each body is
-    Span<Vec3> overlap_shift;  // (n,) m, overlap.h's position corrections
     Graph graph;
     Rest rest;
     StageTimers timers;      // the world's time per stage, filled by step_world
@@ -155,11 +174,9 @@ struct WorldStep {
 // one by one).
 constexpr int SUPPORT_CONTACTS = 4;
 
-// The batched buffers behind a ContactSet: B worlds of C contacts.
+// The batched buffers behind a ContactSet: B worlds of c contacts.
 struct ContactSetBuffers {
-    Array<Vec3> point, normal, centre_a, centre_b;
-    Array<double> depth, gap, orient;
-    Array<int64_t> group, partner, source;
+    RG_CONTACT_SET_ROWS(RG_ARRAY_FIELD)
     int64_t contacts = 0;
 
     void allocate(int num_worlds, int64_t num_contacts);
@@ -171,13 +188,11 @@ struct ContactSetBuffers {
 // world's steps needed, so whether a step overflows (and is run again, which wakes the
 // world: contacts.h) is the same alone and beside any other worlds in a batch.
 struct ContactCacheBuffers {
-    Array<int64_t> first, count;
-    Array<Vec3> centre_a, centre_b, shift_a, shift_b, turn_a, turn_b;
-    Array<Vec3> point, normal, arm_a, arm_b;
-    Array<double> depth;
-    Array<int64_t> used, needed, detected, limit;
-    Array<Pose> pose;
-    Array<int64_t> posed, detections;
+    RG_CACHE_PAIR_ROWS(RG_ARRAY_FIELD)
+    RG_CACHE_POOL_ROWS(RG_ARRAY_FIELD)
+    RG_CACHE_BODY_ROWS(RG_ARRAY_FIELD)
+    RG_CACHE_COUNTS(RG_ARRAY_FIELD)
+    Array<int64_t> limit;
     int64_t bodies = 0, pairs = 0, rows = 0;
 
     void allocate_bodies(int num_worlds, int64_t num_bodies);
@@ -192,33 +207,70 @@ struct ContactCacheBuffers {
     ContactCache view(int w);
 };
 
-// The batched buffers behind a Graph: B worlds of n bodies and P pairs.
+// The batched buffers behind a PairLists (broad_phase.h): B worlds of n bodies and P pairs.
+// pair_a and pair_b hold what the last step listed (read by queries); each world keeps its
+// first rows when P grows. order starts as 0..n-1 in every world.
+struct PairListBuffers {
+    RG_PAIR_LIST_BODY_ROWS(RG_ARRAY_FIELD)
+    RG_PAIR_LIST_PAIR_ROWS(RG_ARRAY_FIELD)
+    int64_t row_bodies = 0, row_pairs = 0;  // n, P
+
+    void allocate_bodies(int num_worlds, int64_t num_bodies);
+    void allocate_pairs(int num_worlds, int64_t num_pairs);
+    PairLists rows(int w);
+};
+
+// The batched buffers behind the step's own rows (RG_STEP_ROWS): B worlds of n bodies.
+struct StepBuffers {
+    RG_STEP_ROWS(RG_ARRAY_FIELD)
+    int64_t row_bodies = 0;  // n
+
+    void allocate(int num_worlds, int64_t num_bodies);
+    // World w's rows, into the step context.
+    void view(int w, StepContext& out);
+};
+
+// The batched buffers behind a Graph: B worlds of n bodies and P pairs, allocated afresh
+// when P grows (scratch).
 struct GraphBuffers {
-    Array<uint8_t> touching, on_stack;
-    Array<int64_t> nodes, node_of, edge_from, edge_to, edge_start, targets, component,
-        component_level, by_component, index, low, stack, calls, next_edge, level, by_level,
-        counts, body_pair_start, body_pairs, level_pair_start, level_pairs;
+    RG_GRAPH_ROWS(RG_ARRAY_FIELD)
     int64_t bodies = 0, pairs = 0;
 
     void allocate(int num_worlds, int64_t num_bodies, int64_t num_pairs);
     Graph rows(int w);
 };
 
-class StepContext {
+// The batched buffers behind a Rest (all but asleep, which is Batch's): B worlds of n bodies
+// and P pairs. The per-pair rows keep each world's first rows when P grows.
+struct RestBuffers {
+    RG_REST_BODY_ROWS(RG_ARRAY_FIELD)
+    RG_REST_PAIR_ROWS(RG_ARRAY_FIELD)
+    RG_REST_COUNTS(RG_ARRAY_FIELD)
+    int64_t row_bodies = 0, row_pairs = 0;  // n, P
+
+    void allocate_bodies(int num_worlds, int64_t num_bodies);
+    void allocate_pairs(int num_worlds, int64_t num_pairs);
+    // World w's rows, asleep its rows of Batch::asleep.
+    Rest rows(int w, Span<uint8_t> asleep);
+};
+
+// The batch: every buffer the step reads and writes for B worlds of one scene.
+class Batch {
 public:
-    // B worlds of n bodies (motion (n,)), their geometry, and the contact capacity of one
-    // pair (max_pair_contacts in geometry.py).
-    StepContext(int num_worlds, Geometry geometry, std::vector<int32_t> motion, Vec3 gravity,
-                Settings settings, int64_t pair_contacts);
+    // B worlds of n bodies (motion (n,)), their geometry, gravity (m/s^2), the solver's
+    // settings and the contact capacity of one pair (max_pair_contacts in geometry.py).
+    Batch(int num_worlds, Geometry geometry, std::vector<int32_t> motion, Vec3 gravity,
+          Settings settings, int64_t pair_contacts);
 
     int num_worlds() const { return num_worlds_; }
     int num_bodies() const { return num_bodies_; }
     int64_t pair_capacity() const { return pair_capacity_; }
     const Geometry& geometry() const { return geometry_; }
     const Settings& settings() const { return settings_; }
+    const StageSwitches& stages() const { return stages_; }
 
     // The rows of world w.
-    WorldStep world(int w);
+    StepContext world(int w);
 
     // Make room for at least `needed` pairs per world, keeping the pairs listed so far.
     void grow_pairs(int64_t needed);
@@ -244,7 +296,7 @@ public:
     Array<Quat> attach_offset_orientation;
     // What the last step listed, per world: read by queries.
     Array<int64_t> pair_count;      // (B,)
-    Array<int32_t> pair_a, pair_b;  // (B, P)
+    PairListBuffers lists;          // pair_a, pair_b (B, P)
     Array<Vec3> pair_impulse;       // (B, P)
     Array<uint8_t> asleep;          // (B, n)
     // Time per stage of every step so far (timers.h), per world: read by World.profile().
@@ -260,26 +312,16 @@ private:
     int64_t pair_capacity_ = 0;
     Geometry geometry_;
     Settings settings_;
-    // broad phase, per body (n) and per pair (P)
-    Array<Aabb> bounds_;
-    Array<int64_t> order_, keys_, spare_;
-    Array<double> reach_;
-    Array<Vec3> start_;  // (B, 3 n)
+    StageSwitches stages_;
+    double gravity_length_;
+    Vec3 up_;
+    StepBuffers step_;
     // impulse stages
     ContactCacheBuffers contacts_;
-    Array<double> body_reach_;
+    Array<double> body_reach_;  // (n,) shared by the worlds
     ContactSetBuffers scratch_, wide_;
-    Array<int64_t> pairs_of_;
-    Array<Vec3> overlap_shift_;
     GraphBuffers graph_;
-    // sleeping
-    Array<int64_t> awake_pairs_, island_, previous_island_, island_bodies_, island_pairs_,
-        previous_bodies_, previous_pairs_, previous_keys_, previous_count_, previous_awake_,
-        at_rest_;
-    Array<uint8_t> resting_, slow_, kept_, intact_;
-    Array<double> slow_time_, previous_dt_;
-    Array<double> snapshot_;
-    Array<Vec3> previous_impulse_;
+    RestBuffers rest_;  // sleeping
 };
 
 }  // namespace rg

@@ -1,0 +1,21 @@
+// Settings: what SolverConfig (rigid_gym/config.py) decides, as the stages take it. The one
+// home of each setting's default: SolverConfig's fields default to a Settings() made here
+// (bound as rigid_gym._core.Settings), and the stage rules (stages.h) read these fields.
+#pragma once
+
+namespace rg {
+
+struct Settings {
+    int collision_passes = 5;         // solver.h; 0: stage off
+    int contact_passes = 10;          // solver.h; 0: stage off
+    int shock_sweeps = 2;             // shock.cpp; 0: stage off
+    int rotation_order = 2;           // 1, 2 or 3 (integrate.h)
+    bool sweep = false;               // broad phase by sort and sweep (else brute force)
+    bool sleep = true;                // sleep.h
+    double sleep_speed = 0.0;         // sleep.h: m/s under which a slow island is stopped; 0: exact only
+    bool detect_every_pass = false;   // contacts.h: the narrow phase in every pass
+    bool keep_energy = true;          // integrate.h: rotation update put back on the body's energy
+    double overlap_correction = 1.0;  // overlap.h: fraction of excess overlap removed per step
+};
+
+}  // namespace rg
