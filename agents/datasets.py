@@ -69,9 +69,14 @@ class Recipe:
     seed: int
 
 
+RECIPE_TASKS: tuple[str, ...] = ("Push", "Stack", "Throw")
+RECIPE_TASKS += ("Tower", "Insert")
+"""The tasks with shipped datasets, in the order their seeds are laid out."""
+
+
 def _recipes() -> tuple[Recipe, ...]:
     recipes = []
-    for t, task in enumerate(("Push", "Stack", "Throw")):
+    for t, task in enumerate(RECIPE_TASKS):
         for k, (name, policy, noise) in enumerate((("expert", "scripted", 0.0),
                                                    ("noisy", "scripted", RECIPE_NOISE),
                                                    ("random", "random", 0.0))):
@@ -81,8 +86,9 @@ def _recipes() -> tuple[Recipe, ...]:
 
 
 RECIPES = _recipes()
-"""The shipped datasets: for push, stack and throw, ``expert-v0`` (the scripted policy),
-``noisy-v0`` (it with ``RECIPE_NOISE``) and ``random-v0`` (uniform random actions)."""
+"""The shipped datasets: for each of RECIPE_TASKS (its name in lower case), ``expert-v0``
+(the scripted policy), ``noisy-v0`` (it with ``RECIPE_NOISE``) and ``random-v0`` (uniform
+random actions)."""
 RECIPE_EPISODES = 200
 """Episodes per shipped dataset (``rigid-gym dataset --recipes``)."""
 

@@ -4,8 +4,10 @@
    task's sparse id: success rate at the episode's end, mean return, mean episode wall time.
 2. Env steps per second through ``gym.make`` in one process (uniform random actions from a
    seeded generator, resets included), the median of ``--repeats`` timings of ``--steps``
-   steps each after a warm-up; panda-gym's PandaPush-v3 timed the same way in the same run
-   when it is installed (``pip install panda-gym``), and our rate as a ratio to it.
+   steps each after a warm-up; each task's panda-gym counterpart (``counterpart``:
+   PandaPush-v3, PandaStack-v3 for Tower, PandaPickAndPlace-v3 for Insert) timed the same way
+   in the same run when it is installed (``pip install panda-gym``), and our rate as a ratio
+   to it.
 3. ``render_mode="rgb_array"`` frame time (480 x 480), the median over 20 frames of an
    episode, after the first frame (which builds the renderer); and a picture of every task at
    the start and at the end of a scripted episode (seed 1), written to ``--frames`` (default
@@ -28,7 +30,17 @@ from rigid_gym.envs.scripted import scripted_policy
 import rigid_gym  # noqa: F401  (registers the ids)
 
 TASKS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
+TASKS += ["rigid_gym/Tower-v0", "rigid_gym/Insert-v0"]
 PANDA_PUSH = "PandaPush-v3"
+COUNTERPARTS = {"rigid_gym/Tower-v0": "PandaStack-v3",
+                "rigid_gym/Insert-v0": "PandaPickAndPlace-v3"}
+"""The panda-gym env a task's speed is compared with, where it is not PANDA_PUSH: the nearest
+task there (a tower of cubes: Stack; a peg carried and put down: PickAndPlace)."""
+
+
+def counterpart(env_id: str) -> str:
+    """The panda-gym env ``env_id``'s speed is compared with."""
+    return COUNTERPARTS.get(env_id, PANDA_PUSH)
 
 
 def scripted_success(env_id: str, episodes: int) -> tuple[float, float, float]:
@@ -90,7 +102,8 @@ def step_rates(env_ids: list[str], steps: int, repeats: int) -> dict[str, list[f
 
 
 def rate_and_ratio(rates: list[float], panda: list[float] | None) -> tuple[float, str]:
-    """The median rate, and the median over rounds of rate / PandaPush's (or why none)."""
+    """The median rate, and the median over rounds of rate / the panda-gym env's (or why
+    none)."""
     if panda is None:
         return statistics.median(rates), "panda-gym not installed"
     return statistics.median(rates), f"{statistics.median(r / p for r, p in zip(rates, panda)):.2f}x"
@@ -142,19 +155,21 @@ def panda_available() -> bool:
 
 
 def print_speed_table(steps: int, repeats: int) -> None:
-    """Env steps/s of every task and of PandaPush-v3 (when installed), timed in turn in each
-    of ``repeats`` rounds of ``steps`` steps; ratios are the medians of the rounds'."""
+    """Env steps/s of every task and of its panda-gym counterpart (when installed), timed in
+    turn in each of ``repeats`` rounds of ``steps`` steps; ratios are the medians of the
+    rounds'."""
     print(f"\nEnv steps/s, gym.make, one env, random actions, resets included (median of "
           f"{repeats} rounds of {steps} steps, every env timed in turn in each round)\n")
-    rates = step_rates(TASKS + ([PANDA_PUSH] if panda_available() else []), steps, repeats)
-    panda = rates.get(PANDA_PUSH)
-    print(f"| env | steps/s | ours/{PANDA_PUSH} |")
+    pandas = list(dict.fromkeys(counterpart(env_id) for env_id in TASKS))
+    rates = step_rates(TASKS + (pandas if panda_available() else []), steps, repeats)
+    print("| env | steps/s | ours / panda-gym's |")
     print("|---|---|---|")
     for env_id in TASKS:
-        rate, ratio = rate_and_ratio(rates[env_id], panda)
-        print(f"| {env_id} | {rate:,.0f} | {ratio} |")
-    if panda:
-        print(f"| {PANDA_PUSH} (panda-gym, PyBullet) | {statistics.median(panda):,.0f} | 1.00x |")
+        rate, ratio = rate_and_ratio(rates[env_id], rates.get(counterpart(env_id)))
+        print(f"| {env_id} | {rate:,.0f} | {ratio} {counterpart(env_id)} |")
+    for panda in pandas:
+        if panda in rates:
+            print(f"| {panda} (panda-gym, PyBullet) | {statistics.median(rates[panda]):,.0f} | |")
 
 
 def main():

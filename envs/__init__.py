@@ -12,6 +12,8 @@ import gymnasium as gym
 
 TASKS = {"Push": 50, "Stack": 100, "Throw": 50}
 """Task name -> episode length in env steps of 0.04 s."""
+TASKS["Tower"] = 150  # 50 per cube, for the default 3 (envs/tower.py)
+TASKS["Insert"] = 50
 
 
 def _register() -> list[str]:

@@ -108,17 +108,18 @@ class TaskBatch:
     # -- the World --------------------------------------------------------------------------
 
     def build(self, half: np.ndarray) -> None:
-        """The Scene and World of cubes with half edges ``half`` (cubes,) m, and the body
-        indices. Cubes get the nominal mass and friction (a reset sets each episode's through
+        """The Scene and World of cubes with half edges ``half`` (cubes,) m (boxes of the
+        task's ``half_extents``), and the body indices. Cubes get the nominal mass and friction (a reset sets each episode's through
         ``set_material``, so a new World and a reused one reach an episode by the same
         arithmetic); poses are the resets'. Restitution is the top of its randomisation
         range: > 0 puts the collision phase into the World's config for every episode."""
         restitution = self.options.randomization.get("restitution", (0.0, 0.0))[1]
         scene = Scene()
         self.table = scene.add_ground(friction=FRICTION, name="table")
-        self.cubes = [scene.add_body(Box((h, h, h)), mass=CUBE_MASS, position=(0.0, 0.0, h),
+        extents = self.task.half_extents(half)
+        self.cubes = [scene.add_body(Box(e), mass=CUBE_MASS, position=(0.0, 0.0, e[2]),
                                      friction=FRICTION, restitution=restitution, name=f"cube{k}")
-                      for k, h in enumerate(half.tolist())]
+                      for k, e in enumerate(extents.tolist())]
         self.gripper_body = scene.add_body(SuctionGripper.shape, kinematic=True,
                                            position=GRIPPER_START, friction=FRICTION,
                                            name="gripper")
@@ -129,7 +130,7 @@ class TaskBatch:
                            num_worlds=self.num_worlds if self.batched else None,
                            config=SolverConfig.for_scene(scene, **SOLVER_SETTINGS))
         self.gripper = SuctionGripper(self.world, self.gripper_body, self.cubes,
-                                      [(h, h, h) for h in half.tolist()], STEP_TIME, Workspace())
+                                      extents, STEP_TIME, Workspace())
         bodies = {PAD: self.gripper_body} | {f"cube{k}": c for k, c in enumerate(self.cubes)}
         self.gather, self.minus = gather_index(self.task.observation_layout, len(scene.bodies),
                                                bodies)
@@ -160,7 +161,7 @@ class TaskBatch:
         half = CUBE_HALF * factors["size"][:, :n] if "size" in ranges \
             else np.full((len(rngs), n), CUBE_HALF)
         starts = self.task.place_cubes(rngs, half)
-        places = self.task.place_fixtures(rngs)
+        places = self.task.place_fixtures(rngs, starts)
         if self.world is None or "size" in ranges:
             self.build(half[0])
         self.write(copies, rows, starts, places, factors)

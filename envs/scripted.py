@@ -16,6 +16,7 @@ import numpy as np
 
 from .base import RigidGymEnv
 from .effector import PAD_HALF_EXTENTS, STEP_DISTANCE
+from .insert import HOLE_DEPTH, PEG_HALF_EXTENTS
 from .observation import Layout
 from .task import CUBE_HALF, FRICTION, STEP_TIME
 
@@ -32,7 +33,8 @@ def scripted_policy(env):
     task = env.unwrapped
     if not isinstance(task, RigidGymEnv):
         raise ValueError(f"scripted_policy: expected a rigid_gym env, got {type(task).__name__}")
-    policy = {"PushEnv": _push, "StackEnv": _stack, "ThrowEnv": _throw}[type(task).__name__]
+    policy = {"PushEnv": _push, "StackEnv": _stack, "ThrowEnv": _throw,
+              "TowerEnv": _tower, "InsertEnv": _insert}[type(task).__name__]
     return functools.partial(policy, task.task.observation_layout)
 
 
@@ -86,17 +88,22 @@ def _push(layout: Layout, observation: dict) -> np.ndarray:
     return _toward(pad, behind + direction * min(speed * STEP_TIME, STEP_DISTANCE))
 
 
-def _carry(pad, cube, target, held) -> np.ndarray:
-    """Pick ``cube`` up and put it down with its centre at ``target``: (motion, grip)."""
+def _carry(pad, cube, target, held, half_height: float = CUBE_HALF,
+           cruise: float = CRUISE_HEIGHT, carry: float = CRUISE_HEIGHT + 0.02,
+           aligned: float = ALIGNED) -> np.ndarray:
+    """Pick ``cube`` (of half height ``half_height``, m) up by its top and put it down with its
+    centre at ``target``: (motion, grip). The pad moves over things at ``cruise`` m (its
+    centre) while empty and at ``carry`` m while holding, and lowers the cube once it is
+    within ``aligned`` m of the target in x, y."""
     if not held:
-        top = cube + np.array([0.0, 0.0, CUBE_HALF + PAD_HALF_HEIGHT])
+        top = cube + np.array([0.0, 0.0, half_height + PAD_HALF_HEIGHT])
         if np.linalg.norm(pad[:2] - top[:2]) > ALIGNED:
-            return np.append(_above(pad, top, CRUISE_HEIGHT), -1.0)
+            return np.append(_above(pad, top, cruise), -1.0)
         return np.append(_toward(pad, top - np.array([0, 0, 0.01])), 1.0)
     offset = pad - cube
     goal_pad = target + offset
-    if np.linalg.norm(cube[:2] - target[:2]) > ALIGNED:
-        return np.append(_above(pad, goal_pad, CRUISE_HEIGHT + 0.02), 1.0)
+    if np.linalg.norm(cube[:2] - target[:2]) > aligned:
+        return np.append(_above(pad, goal_pad, carry), 1.0)
     if cube[2] > target[2] + 0.002:
         return np.append(_toward(pad, goal_pad), 1.0)
     return np.append(np.zeros(3), -1.0)
@@ -115,6 +122,45 @@ def _stack(layout: Layout, observation: dict) -> np.ndarray:
                 return np.append(np.zeros(3), -1.0)
             return _carry(pad, cubes[k], target, held)
     return np.array([0.0, 0.0, 1.0, -1.0])
+
+
+def _tower(layout: Layout, observation: dict) -> np.ndarray:
+    """Carry each cube in turn, cube 0 first, onto the tower's top, moving over the tower built
+    so far; then let go and rise."""
+    pad, held = _field(layout, observation, "pad.position"), _held(layout, observation)
+    goal = observation["desired_goal"].astype(np.float64).reshape(-1, 3)
+    cubes = [_field(layout, observation, f"cube{k}.position") for k in range(len(goal))]
+    for k, (cube, target) in enumerate(zip(cubes, goal)):
+        if np.linalg.norm(cube - target) > 0.01:
+            if held and not _under(pad, cube):
+                return np.append(np.zeros(3), -1.0)  # holding another cube: let it go
+            top = target[2] - CUBE_HALF  # of the tower built so far
+            return _carry(pad, cube, target, held,
+                          cruise=max(CRUISE_HEIGHT, top + PAD_HALF_HEIGHT + 0.02),
+                          carry=max(CRUISE_HEIGHT + 0.02,
+                                    top + 2 * CUBE_HALF + PAD_HALF_HEIGHT + 0.02))
+    return np.array([0.0, 0.0, 1.0, -1.0])
+
+
+def _under(pad: np.ndarray, cube: np.ndarray) -> bool:
+    """Whether ``cube``'s top touches the pad's bottom, under its centre (the cube it holds)."""
+    return bool(np.linalg.norm(pad[:2] - cube[:2]) < 0.01
+                and abs(pad[2] - cube[2] - CUBE_HALF - PAD_HALF_HEIGHT) < 0.005)
+
+
+def _insert(layout: Layout, observation: dict) -> np.ndarray:
+    """Take the peg by its top, carry it upright over the hole with its bottom above the
+    block, line it up to a fraction of the clearance, lower it to the hole's floor, let go and
+    rise."""
+    pad, held = _field(layout, observation, "pad.position"), _held(layout, observation)
+    peg = _field(layout, observation, "cube0.position")
+    goal = observation["desired_goal"].astype(np.float64)
+    if not held and np.linalg.norm(peg - goal) < 0.003:
+        return np.array([0.0, 0.0, 1.0, -1.0])  # in: rise clear
+    half_length = PEG_HALF_EXTENTS[2]
+    return _carry(pad, peg, goal, held, half_length,
+                  carry=HOLE_DEPTH + 2 * half_length + PAD_HALF_HEIGHT + 0.03,
+                  aligned=1e-4)
 
 
 def _throw(layout: Layout, observation: dict) -> np.ndarray:

@@ -49,7 +49,8 @@ GOAL_COLOR = (0.2, 0.8, 0.3)
 
 class Task:
     """Base of every task. A subclass sets ``num_cubes``, ``has_grip``, ``goal_size`` (and
-    ``camera_view`` if the default does not suit) and implements ``place_cubes``,
+    ``camera_view`` if the default does not suit; ``half_extents`` where its objects are not
+    cubes) and implements ``place_cubes``,
     ``sample_goals``, ``goal_reached`` and ``markers``; a task with static bodies beyond the
     table (Throw's bin) also ``place_fixtures`` and ``add_fixtures``."""
 
@@ -60,6 +61,12 @@ class Task:
     """(eye (m), target (m), vertical field of view (deg)) of the rgb_array camera: the
     workspace from the front right, above."""
     num_fixtures: int = 0
+
+    def half_extents(self, half: np.ndarray) -> np.ndarray:
+        """The objects' box half extents (..., cubes, 3) m for half edges ``half``
+        (..., cubes) m: cubes by default; a task with other boxes (Insert's peg) scales its
+        own proportions by them."""
+        return np.repeat(np.asarray(half, dtype=np.float64)[..., None], 3, axis=-1)
 
     @functools.cached_property
     def observation_layout(self) -> Layout:
@@ -72,9 +79,9 @@ class Task:
         copy i's from ``rngs[i]``; the cubes start resting and unrotated."""
         raise NotImplementedError
 
-    def place_fixtures(self, rngs: list) -> np.ndarray:
+    def place_fixtures(self, rngs: list, starts: np.ndarray) -> np.ndarray:
         """Places (k, fixtures, 3) m of the static bodies beyond the table, drawn after the
-        cubes' starts; none by default."""
+        cubes' starts ``starts`` (k, cubes, 3) m; none by default."""
         return np.zeros((len(rngs), 0, 3))
 
     def add_fixtures(self, scene: Scene) -> list[int]:

@@ -27,11 +27,13 @@ from rigid_gym.checks import integer
 from . import TASKS
 from .base import RigidGymEnv, task_spaces
 from .core import ALL, TaskBatch
+from .insert import InsertEnv
 from .options import Options, checked_actions
 from .push import PushEnv
 from .stack import StackEnv
 from .task import CUBE_HALF
 from .throw import ThrowEnv
+from .tower import TowerEnv
 
 
 class RigidGymVectorEnv(VectorEnv):
@@ -59,7 +61,7 @@ class RigidGymVectorEnv(VectorEnv):
             raise ValueError(f"{name}: the copies share one geometry, so randomize cannot include "
                              "'size'; pass a dict of the other ranges (mass, friction, "
                              "restitution)")
-        task = env_class.task
+        task, kwargs = env_class.split_arguments(kwargs)
         self.options = Options.checked(env_class.__name__, **kwargs)
         self.core = TaskBatch(task, self.options, int(num_envs), env_class.__name__)
         self.core.build(np.full(task.num_cubes, CUBE_HALF))
@@ -152,3 +154,5 @@ def vector_entry_point(env_class: type[RigidGymEnv], task: str):
 push = vector_entry_point(PushEnv, "Push")
 stack = vector_entry_point(StackEnv, "Stack")
 throw = vector_entry_point(ThrowEnv, "Throw")
+tower = vector_entry_point(TowerEnv, "Tower")
+insert = vector_entry_point(InsertEnv, "Insert")

@@ -33,8 +33,13 @@ def without_a_display(monkeypatch):
 def test_every_id_is_registered_on_import():
     assert rigid_gym.ENV_IDS == [
         "rigid_gym/Push-v0", "rigid_gym/PushDense-v0", "rigid_gym/Stack-v0",
-        "rigid_gym/StackDense-v0", "rigid_gym/Throw-v0", "rigid_gym/ThrowDense-v0"]
-    assert [gym.spec(i).max_episode_steps for i in rigid_gym.ENV_IDS] == [50, 50, 100, 100, 50, 50]
+        "rigid_gym/StackDense-v0", "rigid_gym/Throw-v0", "rigid_gym/ThrowDense-v0",
+        "rigid_gym/Tower-v0", "rigid_gym/TowerDense-v0",
+        "rigid_gym/Insert-v0", "rigid_gym/InsertDense-v0"]
+    assert [gym.spec(i).max_episode_steps for i in rigid_gym.ENV_IDS] == [
+        50, 50, 100, 100, 50, 50,
+        150, 150,
+        50, 50]
 
 
 @pytest.mark.parametrize("env_id", rigid_gym.ENV_IDS)
