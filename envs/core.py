@@ -130,7 +130,9 @@ class TaskBatch:
                            num_worlds=self.num_worlds if self.batched else None,
                            config=SolverConfig.for_scene(scene, **SOLVER_SETTINGS))
         self.gripper = SuctionGripper(self.world, self.gripper_body, self.cubes,
-                                      extents, STEP_TIME, Workspace())
+                                      extents, STEP_TIME, Workspace(),
+                                      [(i, scene.bodies[i].shape, scene.bodies[i].body_from_shape)
+                                       for i in self.fixtures])
         bodies = {PAD: self.gripper_body} | {f"cube{k}": c for k, c in enumerate(self.cubes)}
         self.gather, self.minus = gather_index(self.task.observation_layout, len(scene.bodies),
                                                bodies)

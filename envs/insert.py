@@ -131,14 +131,18 @@ class InsertEnv(RigidGymEnv):
     which turns the peg to the hole). In the observation, "cube 0" is the peg.
 
     The pad and what it holds are moved, not pushed (the arm is not simulated): a downward move
-    stops on the table and on the cubes' tops, not on the fixture, so a policy can drive a peg
-    into the block beside the hole; the goal test counts a peg in the hole only when its axis
-    is within the clearance (plus 1 mm) of the hole's, where it overlaps no wall.
+    stops where the peg's footprint overlaps the block's top by more than 1 mm (the arm's force
+    limit, ``rigid_gym.envs.effector``), so a peg pressed down off the hole's axis rests on the
+    block; a sideways move is not stopped, so a policy can drive the peg through the block's
+    wall. The goal test counts a peg in the hole only when its axis is within the clearance
+    (plus 1 mm) of the hole's, where it overlaps no wall.
 
     ## Action space
     ``Box(-1, 1, (4,), float32)``: the pad's displacement this step (x 0.05 m per unit along
     x, y, z: at most 1.25 m/s per axis) and the grip (> 0 close, <= 0 open). Values outside
-    [-1, 1] are clipped; NaN or inf raise ``ValueError``. Workspace as PushEnv.
+    [-1, 1] are clipped; NaN or inf raise ``ValueError``. Workspace as PushEnv; a downward
+    move stops where the pad, or the peg it holds, meets the table, the block's top or the
+    peg.
 
     ## Observation space
     ``Dict`` of float32 vectors:

@@ -6,6 +6,7 @@ and bad arguments. Gymnasium's and SB3's checkers run on every id in tests/test_
 import gymnasium as gym
 import numpy as np
 import pytest
+from rigid_gym.envs.effector import fixture_boxes
 from rigid_gym.envs.insert import (
     CLEARANCE,
     HOLE_DEPTH,
@@ -20,6 +21,7 @@ from rigid_gym.envs.task import CUBE_HALF
 from rigid_gym.envs.tower import Tower
 
 import rigid_gym
+from rigid_gym.shapes import Compound, Pose, Sphere
 
 HALF3 = np.full((1, 3), CUBE_HALF)
 NONE = np.array([-1])
@@ -298,3 +300,45 @@ def test_the_same_seed_and_actions_give_bit_identical_episodes(env_id, kwargs):
             assert a[key].tobytes() == b[key].tobytes()
     assert env_b.reset(seed=12)[0]["desired_goal"].tobytes() != runs[0][0][
         "desired_goal"].tobytes()
+
+
+def lower(env, offset, steps=12):
+    """Take the peg (scripted), carry it over the hole ``offset`` (m, along x) off its axis and
+    press it down for ``steps`` steps; returns the peg's position, m."""
+    policy = scripted_policy(env)
+    obs, _ = env.reset(seed=2)
+    goal = obs["desired_goal"].astype(np.float64)
+    u = env.unwrapped
+    while u.gripper.held[0] < 0 or obs["observation"][2] < 0.2:
+        obs = env.step(policy(obs))[0]
+    for _ in range(10):  # over the spot, exactly (a move within one step lands on its target)
+        pad, peg = obs["observation"][:3], obs["achieved_goal"]
+        target = pad + (goal + [offset, 0.0, 0.0] - peg) * [1, 1, 0]
+        obs = env.step(np.append(np.clip((target - pad) / 0.05, -1, 1), 1.0))[0]
+    for _ in range(steps):
+        obs = env.step(np.array([0.0, 0.0, -1.0, 1.0]))[0]
+    assert u.gripper.held[0] == 0
+    return obs["achieved_goal"].astype(np.float64), goal
+
+
+def test_a_peg_pressed_down_off_the_hole_stops_on_the_block():
+    """The arm's force limit holds for the fixture: pressed down 6 mm off the hole's axis (its
+    edge 3 mm over the wall), the held peg stops with its bottom on the block's top, where a
+    kinematic carry would have driven it through the wall; 2 mm off, it goes down to the
+    floor."""
+    env = gym.make("rigid_gym/Insert-v0", max_episode_steps=100)
+    peg, goal = lower(env, 0.006)
+    assert peg[2] - PEG_HALF_EXTENTS[2] == pytest.approx(HOLE_DEPTH, abs=2e-3)
+    assert not env.unwrapped.goal_reached(peg, goal)
+    peg, goal = lower(env, 0.002)
+    np.testing.assert_allclose(peg, goal + [0.002, 0.0, 0.0], atol=1e-4)
+    assert env.unwrapped.goal_reached(peg, goal)
+
+
+def test_the_gripper_stops_only_on_box_parts():
+    bodies, offsets, rotations, halves = fixture_boxes([(4, fixture_shape(), Pose())])
+    assert bodies.tolist() == [4] * 4 and offsets.shape == (4, 3) and halves.shape == (4, 3)
+    np.testing.assert_allclose(rotations, np.repeat(np.eye(3)[None], 4, axis=0))
+    with pytest.raises(ValueError, match="part 1 is a Sphere; the gripper stops only on boxes"):
+        fixture_boxes([(2, Compound(((fixture_shape().parts[0][0], Pose()),
+                                     (Sphere(0.1), Pose()))), Pose())])

@@ -12,9 +12,10 @@ void bind_footprint(nb::module_& m) {
         "command_pads",
         [](nb::handle motions, nb::handle positions, nb::handle rotations, nb::handle velocities,
            int64_t pad, nb::handle pad_half, nb::handle objects, nb::handle halves,
-           nb::handle held, nb::handle low, nb::handle high, double step_distance,
-           double step_time, nb::handle boxes_x, nb::handle boxes_r, nb::handle targets,
-           nb::handle lowest) {
+           nb::handle held, nb::handle fixed_bodies, nb::handle fixed_offsets,
+           nb::handle fixed_rotations, nb::handle fixed_halves, nb::handle low,
+           nb::handle high, double step_distance, double step_time, nb::handle boxes_x,
+           nb::handle boxes_r, nb::handle targets, nb::handle lowest) {
             const auto mo = array_arg<const double>(motions, "command_pads: motions", {-1, 3});
             const int64_t b = extent(mo, 0);
             const auto x = array_arg<const double>(positions, "command_pads: positions",
@@ -38,6 +39,15 @@ void bind_footprint(nb::module_& m) {
             const int64_t k = extent(o, 0);
             const auto hv = array_arg<const double>(halves, "command_pads: halves", {k, 3});
             const auto hd = array_arg<const int64_t>(held, "command_pads: held", {b});
+            const auto fb = array_arg<const int64_t>(fixed_bodies, "command_pads: fixed_bodies",
+                                                     {-1});
+            const int64_t f = extent(fb, 0);
+            const auto fo = array_arg<const double>(fixed_offsets, "command_pads: fixed_offsets",
+                                                    {f, 3});
+            const auto fr = array_arg<const double>(fixed_rotations,
+                                                    "command_pads: fixed_rotations", {f, 3, 3});
+            const auto fh = array_arg<const double>(fixed_halves, "command_pads: fixed_halves",
+                                                    {f, 3});
             const auto lo = array_arg<const double>(low, "command_pads: low", {3});
             const auto hi = array_arg<const double>(high, "command_pads: high", {3});
             const auto bx = array_arg<double>(boxes_x, "command_pads: boxes_x", {k, 3});
@@ -47,6 +57,7 @@ void bind_footprint(nb::module_& m) {
             check_indices(rows<const int64_t>(o), 0, n, "command_pads: objects", "bodies");
             check_indices(rows<const int64_t>(hd), -1, k, "command_pads: held",
                           "indices into objects, -1: none");
+            check_indices(rows<const int64_t>(fb), 0, n, "command_pads: fixed_bodies", "bodies");
             // the parts under test are the pad and the box it holds: two at most
             Vec3 parts_x[2], parts_half[2];
             Mat3 parts_r[2];
@@ -59,6 +70,10 @@ void bind_footprint(nb::module_& m) {
             q.objects = rows<const int64_t>(o);
             q.halves = rows<const Vec3>(hv);
             q.held = rows<const int64_t>(hd);
+            q.fixed_bodies = rows<const int64_t>(fb);
+            q.fixed_offsets = rows<const Vec3>(fo);
+            q.fixed_rotations = rows<const Mat3>(fr);
+            q.fixed_halves = rows<const Vec3>(fh);
             q.parts_x = {parts_x, 2};
             q.parts_r = {parts_r, 2};
             q.parts_half = {parts_half, 2};
@@ -78,18 +93,24 @@ void bind_footprint(nb::module_& m) {
         },
         nb::arg("motions"), nb::arg("positions"), nb::arg("rotations"), nb::arg("velocities"),
         nb::arg("pad"), nb::arg("pad_half"), nb::arg("objects"), nb::arg("halves"),
-        nb::arg("held"), nb::arg("low"), nb::arg("high"), nb::arg("step_distance"),
+        nb::arg("held"), nb::arg("fixed_bodies"), nb::arg("fixed_offsets"),
+        nb::arg("fixed_rotations"), nb::arg("fixed_halves"), nb::arg("low"), nb::arg("high"),
+        nb::arg("step_distance"),
         nb::arg("step_time"), nb::arg("boxes_x"), nb::arg("boxes_r"), nb::arg("targets"),
         nb::arg("lowest"),
         "One env step's command of the gripper of every world (src/envs/footprint.h): the pad's "
         "target is its centre plus step_distance (m) x motion, clamped to [low, high] (3,) m; "
-        "a downward move stops where the pad, or the box it holds, would rest on the table or "
-        "on the top of a box under its footprint (never lifting the pad); the pad's velocity is "
+        "a downward move stops where the pad, or the box it holds, would rest on the table, "
+        "on the top of a box or of a fixture's box part under its footprint (never lifting the "
+        "pad); the pad's velocity is "
         "set to reach the target in step_time (s). motions (B, 3) in [-1, 1]; positions "
         "(B, n, 3) m, rotations (B, n, 3, 3) and velocities (B, n, 3) m/s (written: the pads') "
         "of every body; pad: the pad's body index, pad_half (3,) m; objects (K,) int64 the "
         "boxes' body indices and halves (K, 3) m their half extents (the same in every world); "
-        "held (B,) int64 the held box (an index into objects, -1: none). Work arrays, "
+        "held (B,) int64 the held box (an index into objects, -1: none); fixed_bodies (F,) "
+        "int64 the static bodies of the fixtures' box parts, fixed_offsets (F, 3) m and "
+        "fixed_rotations (F, 3, 3) each part's pose in its body's frame, fixed_halves (F, 3) m "
+        "its half extents (F = 0: none). Work arrays, "
         "overwritten: boxes_x (K, 3), boxes_r (K, 3, 3), targets (B, 3), lowest (B,).");
 }
 
