@@ -16,7 +16,7 @@ import numpy as np
 
 from .base import RigidGymEnv
 from .effector import PAD_HALF_EXTENTS, STEP_DISTANCE
-from .insert import HOLE_DEPTH, PEG_HALF_EXTENTS
+from .insert import CLEARANCE, HOLE_DEPTH, HOLE_HALF, PEG_HALF_EXTENTS, Insert
 from .observation import Layout
 from .task import CUBE_HALF, FRICTION, STEP_TIME
 
@@ -26,6 +26,8 @@ CRUISE_HEIGHT = 0.12
 ALIGNED = 0.006
 """m: x, y error under which the pad counts as above (or behind) its mark."""
 G = 9.81
+INSERT = Insert()
+"""Insert's goal test, which the policy reads from the observation's goals."""
 
 
 def scripted_policy(env):
@@ -149,18 +151,31 @@ def _under(pad: np.ndarray, cube: np.ndarray) -> bool:
 
 
 def _insert(layout: Layout, observation: dict) -> np.ndarray:
-    """Take the peg by its top, carry it upright over the hole with its bottom above the
-    block, line it up to a fraction of the clearance, lower it to the hole's floor, let go and
-    rise."""
+    """Take the peg by its top and lift it clear of the block; over the block, line it up with
+    the hole and lower it; in the hole, push it down to the floor, let go and rise. Every
+    branch reads where the peg is now, so it recovers from a push off line: a peg lowered off
+    the hole stops on the block (the force limit) and is lined up again there."""
     pad, held = _field(layout, observation, "pad.position"), _held(layout, observation)
     peg = _field(layout, observation, "cube0.position")
     goal = observation["desired_goal"].astype(np.float64)
-    if not held and np.linalg.norm(peg - goal) < 0.003:
-        return np.array([0.0, 0.0, 1.0, -1.0])  # in: rise clear
     half_length = PEG_HALF_EXTENTS[2]
-    return _carry(pad, peg, goal, held, half_length,
-                  carry=HOLE_DEPTH + 2 * half_length + PAD_HALF_HEIGHT + 0.03,
-                  aligned=1e-4)
+    if not held:
+        if INSERT.goal_reached(peg, goal):
+            return np.array([0.0, 0.0, 1.0, -1.0])  # in: rise clear
+        return _carry(pad, peg, goal, False, half_length)  # take it by its top
+    goal_pad = goal + (pad - peg)
+    error = np.abs(peg[:2] - goal[:2]).max()  # of its axis from the hole's, along x or y
+    below_top = peg[2] - half_length < HOLE_DEPTH - 0.001  # its bottom below the block's top
+    if below_top and error < HOLE_HALF:  # in the hole: down to the floor, then let go
+        if peg[2] > goal[2] + 0.002:
+            return np.append(_toward(pad, goal_pad), 1.0)
+        return np.append(np.zeros(3), -1.0)
+    if below_top:  # beside the block: up and over, clear of it
+        return np.append(_above(pad, goal_pad, HOLE_DEPTH + 2 * half_length
+                                + PAD_HALF_HEIGHT + 0.03), 1.0)
+    if error > CLEARANCE:  # over the block: line up at this height
+        return np.append(_toward(pad, np.array([goal_pad[0], goal_pad[1], pad[2]])), 1.0)
+    return np.append(_toward(pad, goal_pad), 1.0)
 
 
 def _throw(layout: Layout, observation: dict) -> np.ndarray:
