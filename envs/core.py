@@ -109,9 +109,9 @@ class TaskBatch:
 
     def build(self, half: np.ndarray) -> None:
         """The Scene and World of cubes with half edges ``half`` (cubes,) m (boxes of the
-        task's ``half_extents``), and the body indices. Cubes get the nominal mass and friction (a reset sets each episode's through
-        ``set_material``, so a new World and a reused one reach an episode by the same
-        arithmetic); poses are the resets'. Restitution is the top of its randomisation
+        task's ``half_extents``), and the body indices. Cubes get the nominal mass and
+        friction (a reset sets each episode's through ``set_material``, so a new World and a
+        reused one reach an episode by the same arithmetic); poses are the resets'. Restitution is the top of its randomisation
         range: > 0 puts the collision phase into the World's config for every episode."""
         restitution = self.options.randomization.get("restitution", (0.0, 0.0))[1]
         scene = Scene()

@@ -91,12 +91,10 @@ def _push(layout: Layout, observation: dict) -> np.ndarray:
 
 
 def _carry(pad, cube, target, held, half_height: float = CUBE_HALF,
-           cruise: float = CRUISE_HEIGHT, carry: float = CRUISE_HEIGHT + 0.02,
-           aligned: float = ALIGNED) -> np.ndarray:
+           cruise: float = CRUISE_HEIGHT, carry: float = CRUISE_HEIGHT + 0.02) -> np.ndarray:
     """Pick ``cube`` (of half height ``half_height``, m) up by its top and put it down with its
     centre at ``target``: (motion, grip). The pad moves over things at ``cruise`` m (its
-    centre) while empty and at ``carry`` m while holding, and lowers the cube once it is
-    within ``aligned`` m of the target in x, y."""
+    centre) while empty and at ``carry`` m while holding."""
     if not held:
         top = cube + np.array([0.0, 0.0, half_height + PAD_HALF_HEIGHT])
         if np.linalg.norm(pad[:2] - top[:2]) > ALIGNED:
@@ -104,7 +102,7 @@ def _carry(pad, cube, target, held, half_height: float = CUBE_HALF,
         return np.append(_toward(pad, top - np.array([0, 0, 0.01])), 1.0)
     offset = pad - cube
     goal_pad = target + offset
-    if np.linalg.norm(cube[:2] - target[:2]) > aligned:
+    if np.linalg.norm(cube[:2] - target[:2]) > ALIGNED:
         return np.append(_above(pad, goal_pad, carry), 1.0)
     if cube[2] > target[2] + 0.002:
         return np.append(_toward(pad, goal_pad), 1.0)
