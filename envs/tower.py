@@ -34,8 +34,9 @@ NUM_CUBES = 3
 CUBES_RANGE = (2, 5)
 """The allowed ``num_cubes``: 2 (Stack's tower) to 5 (a 20 cm tower of 4 cm cubes, within the
 pad's reach with the top cube held under it)."""
-STEPS_PER_CUBE = 50
-"""Env steps an episode gives each cube: the registered length is 50 * NUM_CUBES."""
+TALL_VIEW = ((0.45, -0.6, 0.55), (0.0, 0.0, 0.08), 40.0)
+"""The rgb_array camera of towers of 4 and 5 (20 cm) cubes: the pixel observations' "front"
+camera, wider than the default, which frames towers of up to 3 anywhere in the range."""
 
 
 class Tower(Task):
@@ -48,6 +49,8 @@ class Tower(Task):
     def __init__(self, num_cubes: int = NUM_CUBES):
         self.num_cubes = num_cubes
         self.goal_size = 3 * num_cubes
+        if num_cubes > 3:  # the default view cuts off a tower of 4 or 5 at the range's edge
+            self.camera_view = TALL_VIEW
 
     def place_cubes(self, rngs, half):
         n = self.num_cubes

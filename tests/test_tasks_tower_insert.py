@@ -3,6 +3,8 @@ the goal tests, the shaped rewards, the physics of the fit, the scripted policie
 and bad arguments. Gymnasium's and SB3's checkers run on every id in tests/test_envs.py
 (state) and tests/test_pixels.py (every obs_mode)."""
 
+import itertools
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -17,10 +19,11 @@ from rigid_gym.envs.insert import (
     fixture_shape,
 )
 from rigid_gym.envs.scripted import scripted_policy
-from rigid_gym.envs.task import CUBE_HALF
+from rigid_gym.envs.task import CUBE_HALF, Task
 from rigid_gym.envs.tower import Tower
 
 import rigid_gym
+from rigid_gym.render import Camera
 from rigid_gym.shapes import Compound, Pose, Sphere
 
 HALF3 = np.full((1, 3), CUBE_HALF)
@@ -368,3 +371,17 @@ def test_a_scripted_tower_climbs_the_shaped_stages_to_one():
     first = rewards.index(1.0)
     assert rewards[0] < 1 / 9 and 8 / 9 < max(rewards[:first]) < 1.0
     assert all(0.0 <= r <= 1.0 for r in rewards)
+
+
+@pytest.mark.parametrize("num_cubes", [4, 5])
+def test_the_rgb_array_camera_frames_a_tall_tower_anywhere_in_the_range(num_cubes):
+    """Towers of 4 and 5 get a wider rgb_array view than the default (which cut the top of a
+    tower of 5 at the range's edge): the whole range, up to the tower's height, is in the
+    frame."""
+    env = gym.make("rigid_gym/Tower-v0", num_cubes=num_cubes).unwrapped
+    eye, target, fov = env.camera_view
+    height = 2 * CUBE_HALF * num_cubes
+    corners = np.array(list(itertools.product((-0.17, 0.17), (-0.17, 0.17), (0.0, height))))
+    screen, depth = Camera(eye, target, fov_deg=fov).project(corners, 480, 480)
+    assert np.all(depth > 0) and np.all((screen >= 0) & (screen <= 480))
+    assert gym.make("rigid_gym/Tower-v0").unwrapped.camera_view == Task.camera_view
