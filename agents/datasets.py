@@ -69,8 +69,9 @@ class Recipe:
     seed: int
 
 
-RECIPE_TASKS = ["Push", "Stack", "Throw"]
-RECIPE_TASKS += ["Reach", "PickAndPlace", "Slide", "Flip"]
+RECIPE_TASKS: tuple[str, ...] = ("Push", "Stack", "Throw")
+RECIPE_TASKS += ("Reach", "PickAndPlace", "Slide", "Flip")
+RECIPE_TASKS += ("Tower", "Insert")
 """The tasks with shipped datasets; task t's recipes draw from seeds RECIPE_SEED +
 100_000 x (3 t + k), so a task added at the end changes no other task's data."""
 
@@ -87,8 +88,9 @@ def _recipes() -> tuple[Recipe, ...]:
 
 
 RECIPES = _recipes()
-"""The shipped datasets: for each of RECIPE_TASKS (push, stack, throw, ...), ``expert-v0`` (the scripted policy),
-``noisy-v0`` (it with ``RECIPE_NOISE``) and ``random-v0`` (uniform random actions)."""
+"""The shipped datasets: for each of RECIPE_TASKS (its name in lower case), ``expert-v0``
+(the scripted policy), ``noisy-v0`` (it with ``RECIPE_NOISE``) and ``random-v0`` (uniform
+random actions)."""
 RECIPE_EPISODES = 200
 """Episodes per shipped dataset (``rigid-gym dataset --recipes``)."""
 

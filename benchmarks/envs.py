@@ -6,8 +6,9 @@
    seeded generator, resets included), the median of ``--repeats`` timings of ``--steps``
    steps each after a warm-up; each task's panda-gym counterpart (``COUNTERPARTS``: PandaPush-v3
    for Push, Stack and Throw, PandaReach-v3, PandaPickAndPlace-v3, PandaSlide-v3 and
-   PandaFlip-v3 for theirs) timed the same way in the same run when panda-gym is installed
-   (``pip install panda-gym``), and our rate as a ratio to it.
+   PandaFlip-v3 for theirs, PandaStack-v3 for Tower, PandaPickAndPlace-v3 for Insert) timed the
+   same way in the same run when panda-gym is installed (``pip install panda-gym``), and our
+   rate as a ratio to it.
 3. ``render_mode="rgb_array"`` frame time (480 x 480), the median over 20 frames of an
    episode, after the first frame (which builds the renderer); and a picture of every task at
    the start and at the end of a scripted episode (seed 1), written to ``--frames`` (default
@@ -38,8 +39,12 @@ COUNTERPARTS = {"rigid_gym/Push-v0": PANDA_PUSH, "rigid_gym/Stack-v0": PANDA_PUS
 COUNTERPARTS.update({"rigid_gym/Reach-v0": "PandaReach-v3",
                      "rigid_gym/PickAndPlace-v0": "PandaPickAndPlace-v3",
                      "rigid_gym/Slide-v0": "PandaSlide-v3", "rigid_gym/Flip-v0": "PandaFlip-v3"})
+TASKS += ["rigid_gym/Tower-v0", "rigid_gym/Insert-v0"]
+COUNTERPARTS.update({"rigid_gym/Tower-v0": "PandaStack-v3",
+                     "rigid_gym/Insert-v0": "PandaPickAndPlace-v3"})
 """Each task's panda-gym env for the speed ratio (Stack's and Throw's have none of the same
-kind: PandaPush-v3, one cube, as before)."""
+kind: PandaPush-v3, one cube; Tower's the nearest there, a tower of cubes: PandaStack-v3;
+Insert's a peg carried and put down: PandaPickAndPlace-v3)."""
 
 
 def scripted_success(env_id: str, episodes: int) -> tuple[float, float, float]:
@@ -159,15 +164,26 @@ def scripted_frames(env_id: str, seed: int = 1) -> tuple[np.ndarray, np.ndarray]
     return start, env.render()
 
 
+PICTURE_COLUMNS = 5
+"""Tasks per row of the task picture."""
+
+
 def save_task_picture(path: Path) -> None:
-    """One PNG: a column per task, its start above its end."""
+    """One PNG: a cell per task, its start above its end, PICTURE_COLUMNS cells a row (the
+    last row filled with white), at half the frames' resolution (2 x 2 means)."""
     import matplotlib.pyplot as plt
 
-    columns = [np.concatenate(scripted_frames(env_id), axis=0) for env_id in TASKS]
+    cells = [np.concatenate(scripted_frames(env_id), axis=0) for env_id in TASKS]
+    cells += [np.full_like(cells[0], 255)] * (-len(cells) % PICTURE_COLUMNS)
+    rows = [np.concatenate(cells[i:i + PICTURE_COLUMNS], axis=1)
+            for i in range(0, len(cells), PICTURE_COLUMNS)]
+    picture = np.concatenate(rows, axis=0).astype(np.float64)
+    h, w = picture.shape[0] // 2 * 2, picture.shape[1] // 2 * 2
+    half = picture[:h, :w].reshape(h // 2, 2, w // 2, 2, 3).mean(axis=(1, 3))
     path.parent.mkdir(parents=True, exist_ok=True)
-    plt.imsave(path, np.concatenate(columns, axis=1))
-    print(f"\nwrote {path}: {', '.join(TASKS)} left to right; start above, end of a "
-          "scripted episode (seed 1) below")
+    plt.imsave(path, half.round().astype(np.uint8))
+    print(f"\nwrote {path}: {', '.join(TASKS)}, {PICTURE_COLUMNS} a row, left to right; start "
+          "above, end of a scripted episode (seed 1) below")
 
 
 def panda_available() -> bool:

@@ -15,6 +15,8 @@ TASKS = {"Push": 50, "Stack": 100, "Throw": 50}
 TASKS.update({"Reach": 50, "PickAndPlace": 50, "Slide": 50, "Flip": 50})  # panda-gym's lengths
 MODULES = {"PickAndPlace": "pick_and_place"}
 """Task name -> its module's name where that is not the name in lower case."""
+TASKS["Tower"] = 150  # 50 per cube, for the default 3 (envs/tower.py)
+TASKS["Insert"] = 50
 
 
 def _register() -> list[str]:

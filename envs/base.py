@@ -82,6 +82,14 @@ class RigidGymEnv(gym.Env):
         """render_mode='human': whether frames go to the rerun viewer (a display was found at
         the first render), None until then."""
 
+    @classmethod
+    def split_arguments(cls, kwargs: dict) -> tuple[Task, dict]:
+        """The task that constructor arguments ``kwargs`` make, and the arguments left for
+        ``Options``: the class's ``task`` and all of them, unless the task takes arguments of
+        its own (TowerEnv's ``num_cubes``), which it takes out. The vector env builds its task
+        with this."""
+        return cls.task, kwargs
+
     # -- the Gymnasium API -------------------------------------------------------------------
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):

@@ -104,19 +104,20 @@ class TaskBatch:
     # -- the World --------------------------------------------------------------------------
 
     def build(self, half: np.ndarray) -> None:
-        """The Scene and World of cubes with half edges ``half`` (cubes,) m, and the body
-        indices. Cubes get the nominal mass and friction (a reset sets each episode's through
-        ``set_material``, so a new World and a reused one reach an episode by the same
-        arithmetic); poses are the resets'. Restitution is the top of its randomisation
+        """The Scene and World of cubes with half edges ``half`` (cubes,) m (boxes of the
+        task's ``half_extents``), and the body indices. Cubes get the nominal mass and
+        friction (a reset sets each episode's through ``set_material``, so a new World and a
+        reused one reach an episode by the same arithmetic); poses are the resets'. Restitution is the top of its randomisation
         range: > 0 puts the collision phase into the World's config for every episode."""
         restitution = self.options.randomization.get("restitution", (0.0, 0.0))[1]
         scene = Scene()
         task = self.task
         self.table = scene.add_ground(friction=task.table_friction, name="table")
-        self.cubes = [scene.add_body(task.object_shape(h), mass=CUBE_MASS,
-                                     position=(0.0, 0.0, h), friction=task.object_friction,
+        extents = task.half_extents(half)
+        self.cubes = [scene.add_body(task.object_shape(e), mass=CUBE_MASS,
+                                     position=(0.0, 0.0, e[2]), friction=task.object_friction,
                                      restitution=restitution, name=f"cube{k}")
-                      for k, h in enumerate(half.tolist())]
+                      for k, e in enumerate(extents.tolist())]
         self.gripper_body = scene.add_body(SuctionGripper.shape, kinematic=True,
                                            position=GRIPPER_START, friction=FRICTION,
                                            name="gripper")
@@ -127,8 +128,9 @@ class TaskBatch:
                            num_worlds=self.num_worlds if self.batched else None,
                            config=SolverConfig.for_scene(scene, **SOLVER_SETTINGS))
         self.gripper = SuctionGripper(self.world, self.gripper_body, self.cubes,
-                                      [task.object_extents(h) for h in half.tolist()], STEP_TIME,
-                                      Workspace())
+                                      extents, STEP_TIME, Workspace(),
+                                      [(i, scene.bodies[i].shape, scene.bodies[i].body_from_shape)
+                                       for i in self.fixtures])
         bodies = {PAD: self.gripper_body} | {f"cube{k}": c for k, c in enumerate(self.cubes)}
         self.gather, self.minus = gather_index(self.task.observation_layout, len(scene.bodies),
                                                bodies)
@@ -159,7 +161,7 @@ class TaskBatch:
         half = CUBE_HALF * factors["size"][:, :n] if "size" in ranges \
             else np.full((len(rngs), n), CUBE_HALF)
         starts = self.task.place_cubes(rngs, half)
-        places = self.task.place_fixtures(rngs)
+        places = self.task.place_fixtures(rngs, starts)
         if self.world is None or "size" in ranges:
             self.build(half[0])
         self.write(copies, rows, starts, places, factors)

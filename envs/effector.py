@@ -12,7 +12,9 @@ plain physics, and both stand for the robot arm that is not simulated:
 * **Force limit.** An arm stops when it presses a body into the table; a kinematic body would
   not (it would crush the body through the table, which no solver can resolve). So a downward
   move stops where the lowest point of the gripper (or of the object it holds) meets the top
-  of a free object under its footprint, or the table.
+  of a free object under its footprint, the top of a static fixture's box part under it
+  (Insert's block, Throw's bin), or the table. Sideways, nothing stops the pad: it and what
+  it holds pass through a fixture they are driven into.
 
 Everything else (pushing, tipping, sliding, flight after release) is the solver's.
 """
@@ -24,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from rigid_gym._core import Pads
 
-from rigid_gym.shapes import Box
+from rigid_gym.shapes import Box, Compound, Pose
 
 STEP_DISTANCE = 0.05
 """m the gripper moves per env step along an axis at action 1 (panda-gym's and Fetch's scale)."""
@@ -51,6 +53,8 @@ class SuctionGripper:
 
     objects: indices of the dynamic bodies it may push and grip, each a Box; ``half_extents``
         (k, 3) m their sizes (the same in every world). ``step_time``: s per env step.
+    fixtures: (body index, shape, body_from_shape Pose) of each static body a downward move
+        stops on (``fixture_boxes``: a Box or a Compound of Boxes).
     ``held`` (B,) int64: the object each world's gripper holds (an index into ``objects``),
     -1 for none.
     """
@@ -58,7 +62,7 @@ class SuctionGripper:
     shape = Box(PAD_HALF_EXTENTS)
 
     def __init__(self, world, body: int, objects, half_extents, step_time: float,
-                 workspace: Workspace = Workspace()):
+                 workspace: Workspace = Workspace(), fixtures=()):
         self.world = world
         self.body = body
         self.objects = np.asarray(objects, dtype=np.int64)
@@ -66,10 +70,14 @@ class SuctionGripper:
         self.step_time = step_time
         self.workspace = workspace
         self.held = np.full(world.num_worlds, -1, dtype=np.int64)
-        # what every command passes to the core, fixed once (the pads, the boxes, the workspace)
+        # what every command passes to the core, fixed once (the pads, the boxes, the fixtures'
+        # box parts, the workspace)
+        fixed_bodies, fixed_offsets, fixed_rotations, fixed_halves = fixture_boxes(fixtures)
         self.pads = Pads(num_worlds=world.num_worlds, num_bodies=len(world.scene), pad=body,
                          pad_half=PAD_HALF_EXTENTS, objects=self.objects,
                          halves=self.half_extents, low=workspace.low, high=workspace.high,
+                         fixed_bodies=fixed_bodies, fixed_offsets=fixed_offsets,
+                         fixed_rotations=fixed_rotations, fixed_halves=fixed_halves,
                          step_distance=STEP_DISTANCE, step_time=step_time)
         # a contact within GRIP_MARGIN needs the centres within the two bounding spheres
         reach = (np.linalg.norm(PAD_HALF_EXTENTS) + np.linalg.norm(self.half_extents, axis=1)
@@ -132,3 +140,23 @@ class SuctionGripper:
         """Nothing is held any more in ``worlds`` (an index array, or slice(None)): their
         World was reset, which detaches every body."""
         self.held[worlds] = -1
+
+
+def fixture_boxes(fixtures) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The box parts of static ``fixtures`` ((body index, shape, body_from_shape Pose) each;
+    the shape a Box or a Compound of Boxes), as ``Pads`` takes them: the body of each
+    part (F,) int64, its centre (F, 3) m and rotation (F, 3, 3) in the body's frame, its half
+    extents (F, 3) m."""
+    bodies, offsets, rotations, halves = [], [], [], []
+    for body, shape, body_from_shape in fixtures:
+        parts = shape.parts if isinstance(shape, Compound) else ((shape, Pose()),)
+        for k, (part, pose) in enumerate(parts):
+            if not isinstance(part, Box):
+                raise ValueError(f"SuctionGripper: fixture body {body}'s part {k} is a "
+                                 f"{type(part).__name__}; the gripper stops only on boxes")
+            bodies.append(body)
+            offsets.append(body_from_shape.apply(pose.position))
+            rotations.append(body_from_shape.rotation() @ pose.rotation())
+            halves.append(part.half_extents)
+    return (np.array(bodies, dtype=np.int64), np.array(offsets).reshape(-1, 3),
+            np.array(rotations).reshape(-1, 3, 3), np.array(halves).reshape(-1, 3))

@@ -74,6 +74,20 @@ CAMERAS["Reach"] = {
 """Reach's, PickAndPlace's and Flip's cameras: Push's workspace up to 0.3 m (targets in the
 air), and out to +-0.22 m (where rolls take Flip's cube)."""
 CAMERAS.update(PickAndPlace=CAMERAS["Reach"], Flip=CAMERAS["Reach"], Slide=CAMERAS["Throw"])
+VIEWED["Tower"] = ((-0.18, -0.18, 0.0), (0.18, 0.18, 0.22))  # Push's, up to 5 cubes high
+CAMERAS["Tower"] = {
+    "front": Camera(eye=(0.45, -0.6, 0.55), target=(0.0, 0.0, 0.08), fov_deg=40.0),
+    "top": Camera(eye=(0.0, 0.0, 1.0), target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0),
+                  fov_deg=27.0),
+    "side": Camera(eye=(0.0, -0.8, 0.3), target=(0.0, 0.0, 0.1), fov_deg=36.0),
+}
+VIEWED["Insert"] = ((-0.2, -0.2, 0.0), (0.2, 0.2, 0.12))  # the fixture's 5 cm beyond the range
+CAMERAS["Insert"] = {
+    "front": Camera(eye=(0.45, -0.6, 0.5), target=(0.0, 0.0, 0.04), fov_deg=40.0),
+    "top": Camera(eye=(0.0, 0.0, 1.0), target=(0.0, 0.0, 0.0), up=(0.0, 1.0, 0.0),
+                  fov_deg=27.0),
+    "side": Camera(eye=(0.0, -0.8, 0.3), target=(0.0, 0.0, 0.06), fov_deg=38.0),
+}
 CAMERA_NAMES = tuple(CAMERAS["Push"])
 
 

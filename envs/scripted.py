@@ -26,6 +26,7 @@ from .flip import (
     rotation_matrices,
     tilt,
 )
+from .insert import CLEARANCE, HOLE_DEPTH, HOLE_HALF, PEG_HALF_EXTENTS, Insert
 from .observation import Layout
 from .slide import PUCK_FRICTION, PUCK_RADIUS
 from .task import CUBE_HALF, FRICTION, STEP_TIME
@@ -46,6 +47,8 @@ FLIP_PUSH_SPEED = 0.3
 """Flip's push, in action units (0.015 m per step)."""
 FLIP_ROLL_SHIFT = 0.06
 """m a roll moves the cube, about (for choosing rolls that keep it in the middle)."""
+INSERT = Insert()
+"""Insert's goal test, which the policy reads from the observation's goals."""
 
 
 def scripted_policy(env):
@@ -55,7 +58,8 @@ def scripted_policy(env):
         raise ValueError(f"scripted_policy: expected a rigid_gym env, got {type(task).__name__}")
     policy = {"PushEnv": _push, "StackEnv": _stack, "ThrowEnv": _throw,
               "ReachEnv": _reach, "PickAndPlaceEnv": _pick_and_place, "SlideEnv": _slide,
-              "FlipEnv": _flip}[type(task).__name__]
+              "FlipEnv": _flip,
+              "TowerEnv": _tower, "InsertEnv": _insert}[type(task).__name__]
     return functools.partial(policy, task.task.observation_layout)
 
 
@@ -109,17 +113,20 @@ def _push(layout: Layout, observation: dict) -> np.ndarray:
     return _toward(pad, behind + direction * min(speed * STEP_TIME, STEP_DISTANCE))
 
 
-def _carry(pad, cube, target, held) -> np.ndarray:
-    """Pick ``cube`` up and put it down with its centre at ``target``: (motion, grip)."""
+def _carry(pad, cube, target, held, half_height: float = CUBE_HALF,
+           cruise: float = CRUISE_HEIGHT, carry: float = CRUISE_HEIGHT + 0.02) -> np.ndarray:
+    """Pick ``cube`` (of half height ``half_height``, m) up by its top and put it down with its
+    centre at ``target``: (motion, grip). The pad moves over things at ``cruise`` m (its
+    centre) while empty and at ``carry`` m while holding."""
     if not held:
-        top = cube + np.array([0.0, 0.0, CUBE_HALF + PAD_HALF_HEIGHT])
+        top = cube + np.array([0.0, 0.0, half_height + PAD_HALF_HEIGHT])
         if np.linalg.norm(pad[:2] - top[:2]) > ALIGNED:
-            return np.append(_above(pad, top, CRUISE_HEIGHT), -1.0)
+            return np.append(_above(pad, top, cruise), -1.0)
         return np.append(_toward(pad, top - np.array([0, 0, 0.01])), 1.0)
     offset = pad - cube
     goal_pad = target + offset
     if np.linalg.norm(cube[:2] - target[:2]) > ALIGNED:
-        return np.append(_above(pad, goal_pad, CRUISE_HEIGHT + 0.02), 1.0)
+        return np.append(_above(pad, goal_pad, carry), 1.0)
     if cube[2] > target[2] + 0.002:
         return np.append(_toward(pad, goal_pad), 1.0)
     return np.append(np.zeros(3), -1.0)
@@ -138,6 +145,58 @@ def _stack(layout: Layout, observation: dict) -> np.ndarray:
                 return np.append(np.zeros(3), -1.0)
             return _carry(pad, cubes[k], target, held)
     return np.array([0.0, 0.0, 1.0, -1.0])
+
+
+def _tower(layout: Layout, observation: dict) -> np.ndarray:
+    """Carry each cube in turn, cube 0 first, onto the tower's top, moving over the tower built
+    so far; then let go and rise."""
+    pad, held = _field(layout, observation, "pad.position"), _held(layout, observation)
+    goal = observation["desired_goal"].astype(np.float64).reshape(-1, 3)
+    cubes = [_field(layout, observation, f"cube{k}.position") for k in range(len(goal))]
+    for k, (cube, target) in enumerate(zip(cubes, goal)):
+        if np.linalg.norm(cube - target) > 0.01:
+            if held and not _under(pad, cube):
+                return np.append(np.zeros(3), -1.0)  # holding another cube: let it go
+            top = target[2] - CUBE_HALF  # of the tower built so far
+            return _carry(pad, cube, target, held,
+                          cruise=max(CRUISE_HEIGHT, top + PAD_HALF_HEIGHT + 0.02),
+                          carry=max(CRUISE_HEIGHT + 0.02,
+                                    top + 2 * CUBE_HALF + PAD_HALF_HEIGHT + 0.02))
+    return np.array([0.0, 0.0, 1.0, -1.0])
+
+
+def _under(pad: np.ndarray, cube: np.ndarray) -> bool:
+    """Whether ``cube``'s top touches the pad's bottom, under its centre (the cube it holds)."""
+    return bool(np.linalg.norm(pad[:2] - cube[:2]) < 0.01
+                and abs(pad[2] - cube[2] - CUBE_HALF - PAD_HALF_HEIGHT) < 0.005)
+
+
+def _insert(layout: Layout, observation: dict) -> np.ndarray:
+    """Take the peg by its top and lift it clear of the block; over the block, line it up with
+    the hole and lower it; in the hole, push it down to the floor, let go and rise. Every
+    branch reads where the peg is now, so it recovers from a push off line: a peg lowered off
+    the hole stops on the block (the force limit) and is lined up again there."""
+    pad, held = _field(layout, observation, "pad.position"), _held(layout, observation)
+    peg = _field(layout, observation, "cube0.position")
+    goal = observation["desired_goal"].astype(np.float64)
+    half_length = PEG_HALF_EXTENTS[2]
+    if not held:
+        if INSERT.goal_reached(peg, goal):
+            return np.array([0.0, 0.0, 1.0, -1.0])  # in: rise clear
+        return _carry(pad, peg, goal, False, half_length)  # take it by its top
+    goal_pad = goal + (pad - peg)
+    error = np.abs(peg[:2] - goal[:2]).max()  # of its axis from the hole's, along x or y
+    below_top = peg[2] - half_length < HOLE_DEPTH - 0.001  # its bottom below the block's top
+    if below_top and error < HOLE_HALF:  # in the hole: down to the floor, then let go
+        if peg[2] > goal[2] + 0.002:
+            return np.append(_toward(pad, goal_pad), 1.0)
+        return np.append(np.zeros(3), -1.0)
+    if below_top:  # beside the block: up and over, clear of it
+        return np.append(_above(pad, goal_pad, HOLE_DEPTH + 2 * half_length
+                                + PAD_HALF_HEIGHT + 0.03), 1.0)
+    if error > CLEARANCE:  # over the block: line up at this height
+        return np.append(_toward(pad, np.array([goal_pad[0], goal_pad[1], pad[2]])), 1.0)
+    return np.append(_toward(pad, goal_pad), 1.0)
 
 
 def _throw(layout: Layout, observation: dict) -> np.ndarray:

@@ -66,11 +66,12 @@ class Slide(Task):
     table_friction = PUCK_FRICTION
     camera_view = ((0.1, -0.75, 0.6), (0.2, 0.0, 0.02), 40.0)
 
-    def object_shape(self, half):
-        return puck_shape(half)
+    def half_extents(self, half):
+        half = np.asarray(half, dtype=np.float64)[..., None]
+        return np.concatenate([PUCK_RADIUS * half, PUCK_RADIUS * half, half], axis=-1)
 
-    def object_extents(self, half):
-        return (PUCK_RADIUS * half, PUCK_RADIUS * half, half)
+    def object_shape(self, extents):
+        return puck_shape(extents[2])
 
     def place_cubes(self, rngs, half):
         return cube_anywhere(rngs, half, OBJECT_RANGE)

@@ -2,83 +2,17 @@
 
 from __future__ import annotations
 
-import numpy as np
-
-from rigid_gym.recordable import Marker
-from rigid_gym.render import DYNAMIC_PALETTE
-from rigid_gym.shapes import Box
-
 from .base import RigidGymEnv
-from .task import (
-    CUBE_HALF,
-    DISTANCE_THRESHOLD,
-    MARKER_ALPHA,
-    Task,
-    closeness,
-    distance,
-    sample_apart,
-    staged,
-)
-
-OBJECT_RANGE = 0.15
-"""m: each cube starts at x, y uniform in [-0.15, 0.15]."""
-CUBE_SPACING = 0.08
-"""m: the cubes start at least this far apart (x, y), so neither starts on the other."""
-TOWER_RANGE = 0.15
-"""m: the tower's x, y are uniform in [-0.15, 0.15] ..."""
-TOWER_CLEARANCE = 0.08
-"""m: ... and at least this far from both cubes' starts."""
+from .tower import Tower
 
 
-class Stack(Task):
+class Stack(Tower):
     """Two cubes apart on the table; the target is a tower (cube 1 on cube 0) away from both;
-    reached when both cubes are near their targets and placed as the targets are."""
+    reached when both cubes are near their targets and placed as the targets are: the Tower of
+    two (``envs/tower.py``), whose draws, goal test and rewards are Stack's."""
 
-    num_cubes = 2
-    has_grip = True
-    goal_size = 6
-
-    def place_cubes(self, rngs, half):
-        starts = np.zeros((len(rngs), 2, 3))
-        for k, rng in enumerate(rngs):
-            starts[k, 0, :2] = rng.uniform(-OBJECT_RANGE, OBJECT_RANGE, size=2)
-            starts[k, 1, :2] = sample_apart(rng, OBJECT_RANGE, [starts[k, 0]], CUBE_SPACING)
-        starts[:, :, 2] = half
-        return starts
-
-    def sample_goals(self, rngs, starts, half, places):
-        xy = np.array([sample_apart(rng, TOWER_RANGE, cubes, TOWER_CLEARANCE)
-                       for rng, cubes in zip(rngs, starts)])
-        bottom, top = half[:, 0], half[:, 1]
-        return np.column_stack([xy, bottom, xy, 2.0 * bottom + top])
-
-    def goal_reached(self, achieved_goal, desired_goal):
-        error = achieved_goal - desired_goal
-        near = ((distance(error[..., :3]) < DISTANCE_THRESHOLD)
-                & (distance(error[..., 3:]) < DISTANCE_THRESHOLD))
-        # the cubes' relative placement matches the target's: for a target tower (cube 1 one
-        # edge above cube 0) this says cube 1 rests on cube 0. Comparing with the target's
-        # placement, not with a fixed tower, keeps goals that HER relabels from where the
-        # cubes ended up (lying apart) reachable; a fixed tower test made them all failures.
-        mismatch = ((achieved_goal[..., 3:] - achieved_goal[..., :3])
-                    - (desired_goal[..., 3:] - desired_goal[..., :3]))
-        same_shape = ((distance(mismatch[..., :2]) < CUBE_HALF)
-                      & (np.abs(mismatch[..., 2]) < 0.5 * CUBE_HALF))
-        return near & same_shape
-
-    def markers(self, goal, half):
-        # each target in its cube's colour
-        return [Marker(Box((h, h, h)), tuple(goal[3 * k:3 * k + 3]), color, MARKER_ALPHA)
-                for k, (h, color) in enumerate(zip(half.tolist(), DYNAMIC_PALETTE))]
-
-    def shaped_reward(self, pad, held, achieved_goal, desired_goal, half):
-        def carry(k):  # cube k's stages: reach it, hold it (or it lies at its target), carry it
-            cube, target = achieved_goal[:, 3 * k:3 * k + 3], desired_goal[:, 3 * k:3 * k + 3]
-            placed = distance(cube - target) < DISTANCE_THRESHOLD
-            return staged(closeness(pad - cube), (held == k) | placed, closeness(cube - target))
-
-        bottom_placed = distance(achieved_goal[:, :3] - desired_goal[:, :3]) < DISTANCE_THRESHOLD
-        return np.where(bottom_placed, 3.0 + carry(1), carry(0)) / 6.0
+    def __init__(self):
+        super().__init__(2)
 
 
 class StackEnv(RigidGymEnv):

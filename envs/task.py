@@ -50,7 +50,8 @@ GOAL_COLOR = (0.2, 0.8, 0.3)
 
 class Task:
     """Base of every task. A subclass sets ``num_cubes``, ``has_grip``, ``goal_size`` (and
-    ``camera_view`` if the default does not suit) and implements ``place_cubes``,
+    ``camera_view`` if the default does not suit; ``half_extents`` where its objects are not
+    cubes) and implements ``place_cubes``,
     ``sample_goals``, ``goal_reached`` and ``markers``; a task with static bodies beyond the
     table (Throw's bin) also ``place_fixtures`` and ``add_fixtures``."""
 
@@ -72,6 +73,12 @@ class Task:
     markers_in_pixels: bool = True
     """Whether ``pixels`` observations draw the goal markers (the copies of a batch share each
     marker's orientation, so a goal that is an orientation is not drawn there)."""
+
+    def half_extents(self, half: np.ndarray) -> np.ndarray:
+        """The half extents (..., cubes, 3) m of the objects' unrotated bounding boxes for half
+        edges ``half`` (..., cubes) m: cubes by default; a task with other objects (Insert's
+        peg, Slide's puck) scales its own proportions by them."""
+        return np.repeat(np.asarray(half, dtype=np.float64)[..., None], 3, axis=-1)
 
     @functools.cached_property
     def observation_layout(self) -> Layout:
@@ -98,23 +105,20 @@ class Task:
         ``achieved_columns`` unless a task reads the state."""
         return vectors[:, self.achieved_columns]
 
-    def object_shape(self, half: float):
-        """The shape of an object of half edge (or half height) ``half`` m: a cube."""
-        return Box((half, half, half))
-
-    def object_extents(self, half: float) -> tuple[float, float, float]:
-        """Half extents (m) of the box that bounds ``object_shape(half)`` unrotated (what the
-        gripper's force limit and suction reach read)."""
-        return (half, half, half)
+    def object_shape(self, extents):
+        """The shape of an object whose unrotated bounding box has half extents ``extents``
+        (3,) m (``half_extents``'s rows; what the gripper's force limit and suction reach
+        read): a box."""
+        return Box(tuple(extents))
 
     def place_cubes(self, rngs: list, half: np.ndarray) -> np.ndarray:
         """Start positions (k, cubes, 3) m of the cubes with half edges ``half`` (k, cubes) m,
         copy i's from ``rngs[i]``; the cubes start resting and unrotated."""
         raise NotImplementedError
 
-    def place_fixtures(self, rngs: list) -> np.ndarray:
+    def place_fixtures(self, rngs: list, starts: np.ndarray) -> np.ndarray:
         """Places (k, fixtures, 3) m of the static bodies beyond the table, drawn after the
-        cubes' starts; none by default."""
+        cubes' starts ``starts`` (k, cubes, 3) m; none by default."""
         return np.zeros((len(rngs), 0, 3))
 
     def add_fixtures(self, scene: Scene) -> list[int]:

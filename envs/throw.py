@@ -62,7 +62,7 @@ class Throw(Task):
     def place_cubes(self, rngs, half):
         return cube_anywhere(rngs, half, OBJECT_RANGE)
 
-    def place_fixtures(self, rngs):
+    def place_fixtures(self, rngs, starts):
         places = np.zeros((len(rngs), 1, 3))
         for k, rng in enumerate(rngs):
             places[k, 0, 0] = rng.uniform(*BIN_X)

@@ -28,6 +28,7 @@ from . import TASKS
 from .base import RigidGymEnv, task_spaces
 from .core import ALL, TaskBatch
 from .flip import FlipEnv
+from .insert import InsertEnv
 from .options import Options, checked_actions
 from .pick_and_place import PickAndPlaceEnv
 from .push import PushEnv
@@ -36,6 +37,7 @@ from .slide import SlideEnv
 from .stack import StackEnv
 from .task import CUBE_HALF
 from .throw import ThrowEnv
+from .tower import TowerEnv
 
 
 class RigidGymVectorEnv(VectorEnv):
@@ -63,7 +65,7 @@ class RigidGymVectorEnv(VectorEnv):
             raise ValueError(f"{name}: the copies share one geometry, so randomize cannot include "
                              "'size'; pass a dict of the other ranges (mass, friction, "
                              "restitution)")
-        task = env_class.task
+        task, kwargs = env_class.split_arguments(kwargs)
         self.options = Options.checked(env_class.__name__, **kwargs)
         self.core = TaskBatch(task, self.options, int(num_envs), env_class.__name__)
         self.core.build(np.full(task.num_cubes, CUBE_HALF))
@@ -160,3 +162,5 @@ reach = vector_entry_point(ReachEnv, "Reach")
 pick_and_place = vector_entry_point(PickAndPlaceEnv, "PickAndPlace")
 slide = vector_entry_point(SlideEnv, "Slide")
 flip = vector_entry_point(FlipEnv, "Flip")
+tower = vector_entry_point(TowerEnv, "Tower")
+insert = vector_entry_point(InsertEnv, "Insert")

@@ -150,6 +150,7 @@ def test_the_recipes_write_every_shipped_dataset(capsys):
         assert f"{recipe.dataset_id}: 1 episodes" in out
         assert local[recipe.dataset_id]["total_episodes"] == 1
     assert len({r.dataset_id for r in datasets.RECIPES}) == 3 * len(datasets.RECIPE_TASKS)
+    assert {"rigid_gym/tower/expert-v0", "rigid_gym/insert/random-v0"} <= set(local)
     # regenerating replaces them
     assert main(["dataset", "--recipes", "--episodes", "2"]) == 0
     assert minari.load_dataset("rigid_gym/stack/noisy-v0").total_episodes == 2

@@ -19,7 +19,7 @@ import rigid_gym
 
 TASK_IDS = ["rigid_gym/Push-v0", "rigid_gym/Stack-v0", "rigid_gym/Throw-v0"]
 TASK_IDS += ["rigid_gym/Reach-v0", "rigid_gym/PickAndPlace-v0", "rigid_gym/Slide-v0",
-             "rigid_gym/Flip-v0"]
+             "rigid_gym/Flip-v0", "rigid_gym/Tower-v0", "rigid_gym/Insert-v0"]
 
 
 def make(env_id, **kwargs):
@@ -33,11 +33,19 @@ def without_a_display(monkeypatch):
 
 
 def test_every_id_is_registered_on_import():
-    assert rigid_gym.ENV_IDS[:6] == [
+    assert rigid_gym.ENV_IDS == [
         "rigid_gym/Push-v0", "rigid_gym/PushDense-v0", "rigid_gym/Stack-v0",
-        "rigid_gym/StackDense-v0", "rigid_gym/Throw-v0", "rigid_gym/ThrowDense-v0"]
-    assert [gym.spec(i).max_episode_steps for i in rigid_gym.ENV_IDS[:6]] == [50, 50, 100, 100,
-                                                                           50, 50]
+        "rigid_gym/StackDense-v0", "rigid_gym/Throw-v0", "rigid_gym/ThrowDense-v0",
+        "rigid_gym/Reach-v0", "rigid_gym/ReachDense-v0",
+        "rigid_gym/PickAndPlace-v0", "rigid_gym/PickAndPlaceDense-v0",
+        "rigid_gym/Slide-v0", "rigid_gym/SlideDense-v0", "rigid_gym/Flip-v0", "rigid_gym/FlipDense-v0",
+        "rigid_gym/Tower-v0", "rigid_gym/TowerDense-v0",
+        "rigid_gym/Insert-v0", "rigid_gym/InsertDense-v0"]
+    assert [gym.spec(i).max_episode_steps for i in rigid_gym.ENV_IDS] == [
+        50, 50, 100, 100, 50, 50,
+        50, 50, 50, 50, 50, 50, 50, 50,
+        150, 150,
+        50, 50]
 
 
 @pytest.mark.parametrize("env_id", rigid_gym.ENV_IDS)
@@ -218,12 +226,14 @@ def test_pressing_down_on_a_cube_stops_at_its_top_and_leaves_it_on_the_table():
 
 def test_pads_check_what_they_are_made_with_and_commanded():
     """The gripper's bound command object refuses a pad or an object that is no body, a step
-    time <= 0 and arrays of other shapes, saying which; a command sets only the pads'
+    time <= 0, a fixture part on no body and arrays of other shapes, saying which; a command sets only the pads'
     velocities: step_distance x motion / step_time where nothing is below."""
     def pads(**changes):
         kwargs = {"num_worlds": 2, "num_bodies": 3, "pad": 2, "pad_half": PAD_HALF_EXTENTS,
                   "objects": np.array([1], dtype=np.int64), "halves": np.full((1, 3), 0.02),
-                  "low": (-1.0, -1.0, 0.0), "high": (1.0, 1.0, 1.0),
+                  "fixed_bodies": np.array([0], dtype=np.int64),
+                  "fixed_offsets": np.zeros((1, 3)), "fixed_rotations": np.eye(3)[None],
+                  "fixed_halves": np.full((1, 3), 0.05), "low": (-1.0, -1.0, 0.0), "high": (1.0, 1.0, 1.0),
                   "step_distance": STEP_DISTANCE, "step_time": 0.04}
         return Pads(**{**kwargs, **changes})
 
@@ -235,6 +245,10 @@ def test_pads_check_what_they_are_made_with_and_commanded():
         pads(objects=np.array([5], dtype=np.int64))
     with pytest.raises(ValueError, match="Pads: halves"):
         pads(halves=np.full((2, 3), 0.02))
+    with pytest.raises(ValueError, match="Pads: fixed_bodies"):
+        pads(fixed_bodies=np.array([3], dtype=np.int64))
+    with pytest.raises(ValueError, match="Pads: fixed_rotations"):
+        pads(fixed_rotations=np.eye(3))
     driver = pads()
     positions = np.zeros((2, 3, 3))
     positions[:, 1] = (0.5, 0.5, 0.02)  # the box, away from the pads
@@ -447,7 +461,11 @@ LAYOUTS = {
 LAYOUTS.update({"rigid_gym/Reach-v0": ["pad.position", "pad.velocity"],
                 "rigid_gym/PickAndPlace-v0": LAYOUTS["rigid_gym/Throw-v0"],
                 "rigid_gym/Slide-v0": LAYOUTS["rigid_gym/Push-v0"],
-                "rigid_gym/Flip-v0": LAYOUTS["rigid_gym/Throw-v0"]})
+                "rigid_gym/Flip-v0": LAYOUTS["rigid_gym/Throw-v0"],
+                "rigid_gym/Tower-v0": ["pad.position", "pad.velocity", "holding", *(
+                    f"cube{k}.{q}" for k in (0, 1, 2) for q in (
+                        "position", "offset", "orientation", "velocity", "angular_velocity"))],
+                "rigid_gym/Insert-v0": LAYOUTS["rigid_gym/Throw-v0"]})
 """Each task's observation fields in order: the committed models were trained on this order."""
 
 

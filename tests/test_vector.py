@@ -54,7 +54,7 @@ def test_each_copy_equals_a_single_env_with_its_seed(env_id):
         np.testing.assert_array_equal(observation["observation"][i], single_obs[i]["observation"])
     policy = scripted_policy(singles[0])
     endings = 0
-    for _ in range(120):
+    for _ in range(max(120, gym.spec(env_id).max_episode_steps + 20)):  # an episode's end
         actions = np.stack([policy({k: v[i] for k, v in observation.items()})
                             for i in range(num_envs)])
         observation, reward, terminated, truncated, infos = envs.step(actions)

@@ -17,7 +17,8 @@ void bind_footprint(nb::module_& m) {
             "__init__",
             [](Pads* self, int64_t num_worlds, int64_t num_bodies, int64_t pad,
                std::array<double, 3> pad_half, nb::handle objects, nb::handle halves,
-               std::array<double, 3> low, std::array<double, 3> high, double step_distance,
+               nb::handle fixed_bodies, nb::handle fixed_offsets, nb::handle fixed_rotations,
+               nb::handle fixed_halves, std::array<double, 3> low, std::array<double, 3> high, double step_distance,
                double step_time) {
                 if (num_worlds < 1) {
                     throw nb::value_error("Pads: num_worlds must be >= 1");
@@ -36,11 +37,23 @@ void bind_footprint(nb::module_& m) {
                 const int64_t k = extent(o, 0);
                 const auto hv = array_arg<const double>(halves, "Pads: halves", {k, 3});
                 check_indices(rows<const int64_t>(o), 0, num_bodies, "Pads: objects", "bodies");
+                const auto fb = array_arg<const int64_t>(fixed_bodies, "Pads: fixed_bodies", {-1});
+                const int64_t f = extent(fb, 0);
+                const auto fo = array_arg<const double>(fixed_offsets, "Pads: fixed_offsets", {f, 3});
+                const auto fr = array_arg<const double>(fixed_rotations, "Pads: fixed_rotations",
+                                                        {f, 3, 3});
+                const auto fh = array_arg<const double>(fixed_halves, "Pads: fixed_halves", {f, 3});
+                check_indices(rows<const int64_t>(fb), 0, num_bodies, "Pads: fixed_bodies",
+                              "bodies");
                 Pads* p = new (self) Pads();
                 p->pad = pad;
                 p->pad_half = {pad_half[0], pad_half[1], pad_half[2]};
                 p->objects.assign(rows<const int64_t>(o).data, k);
                 p->halves.assign(rows<const Vec3>(hv).data, k);
+                p->fixed_bodies.assign(rows<const int64_t>(fb).data, f);
+                p->fixed_offsets.assign(rows<const Vec3>(fo).data, f);
+                p->fixed_rotations.assign(rows<const Mat3>(fr).data, f);
+                p->fixed_halves.assign(rows<const Vec3>(fh).data, f);
                 p->low = {low[0], low[1], low[2]};
                 p->high = {high[0], high[1], high[2]};
                 p->step_distance = step_distance;
@@ -51,11 +64,16 @@ void bind_footprint(nb::module_& m) {
                 p->lowest.assign(num_worlds, 0.0);
             },
             nb::kw_only(), nb::arg("num_worlds"), nb::arg("num_bodies"), nb::arg("pad"),
-            nb::arg("pad_half"), nb::arg("objects"), nb::arg("halves"), nb::arg("low"),
+            nb::arg("pad_half"), nb::arg("objects"), nb::arg("halves"), nb::arg("fixed_bodies"),
+            nb::arg("fixed_offsets"), nb::arg("fixed_rotations"), nb::arg("fixed_halves"),
+            nb::arg("low"),
             nb::arg("high"), nb::arg("step_distance"), nb::arg("step_time"),
             "B = num_worlds worlds of num_bodies bodies: pad is the pad's body index, pad_half "
             "(3,) m its half extents; objects (K,) int64 the boxes' body indices and halves "
-            "(K, 3) m their half extents (the same in every world); low, high (3,) m the "
+            "(K, 3) m their half extents (the same in every world); fixed_bodies (F,) int64 the "
+            "static bodies of the fixtures' box parts, fixed_offsets (F, 3) m and fixed_rotations "
+            "(F, 3, 3) each part's pose in its body's frame, fixed_halves (F, 3) m its half "
+            "extents (F = 0: none); low, high (3,) m the "
             "workspace the pad's centre stays in; step_distance m of motion per unit of action; "
             "step_time s per env step.")
         .def(
@@ -89,6 +107,10 @@ void bind_footprint(nb::module_& m) {
                 q.pad_half = p.pad_half;
                 q.objects = {p.objects.data(), k};
                 q.halves = {p.halves.data(), k};
+                q.fixed_bodies = {p.fixed_bodies.data(), p.fixed_bodies.size()};
+                q.fixed_offsets = {p.fixed_offsets.data(), p.fixed_offsets.size()};
+                q.fixed_rotations = {p.fixed_rotations.data(), p.fixed_rotations.size()};
+                q.fixed_halves = {p.fixed_halves.data(), p.fixed_halves.size()};
                 q.held = rows<const int64_t>(hd);
                 q.parts_x = {parts_x, 2};
                 q.parts_r = {parts_r, 2};
@@ -111,8 +133,8 @@ void bind_footprint(nb::module_& m) {
             nb::arg("held"),
             "One env step's command of the gripper of every world: the pad's target is its "
             "centre plus step_distance x motion, clamped to [low, high]; a downward move stops "
-            "where the pad, or the box it holds, would rest on the table or on the top of a box "
-            "under its footprint (never lifting the pad); the pad's velocity is set to reach the "
+            "where the pad, or the box it holds, would rest on the table, on the top of a box or "
+            "of a fixture's box part under its footprint (never lifting the pad); the pad's velocity is set to reach the "
             "target in step_time. motions (B, 3) in [-1, 1]; positions (B, n, 3) m, rotations "
             "(B, n, 3, 3) and velocities (B, n, 3) m/s (written: the pads') of every body; held "
             "(B,) int64 the held box (an index into objects, -1: none).");

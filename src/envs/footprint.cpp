@@ -82,13 +82,37 @@ bool footprints_overlap(const Box& a, const Box& b) {
     return true;
 }
 
+// The product a b of two rotations.
+Mat3 product(const Mat3& a, const Mat3& b) {
+    Mat3 out{};
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            out.m[i][j] = a.m[i][0] * b.m[0][j] + a.m[i][1] * b.m[1][j] + a.m[i][2] * b.m[2][j];
+        }
+    }
+    return out;
+}
+
+// The lowest z (m) the pad's centre may take for `part` to rest on `box`, given the part's
+// bottom `bottom` (m) and `height` from it to the pad's centre (m): -INF unless the box is
+// under the part (its top below the part's bottom before the move, `drop` m up, and their
+// footprints overlapping).
+double resting_on(const Box& part, double bottom, double height, double drop, const Box& box) {
+    const double top = z_range(box).high;
+    if (top <= bottom - drop + FOOTPRINT_SLACK && footprints_overlap(part, box)) {
+        return top + height;
+    }
+    return -INF;
+}
+
 // The lowest z (m) the gripper's centre may take at a target of height `target_z`: where one
-// of the first `parts` work parts (at the target) would rest on the table or on the top of one
-// of the work boxes under its footprint. A box counts as under a part if its top is below the
-// part's bottom before the move (the part's bottom at the target minus `drop`, the move's z,
-// m); box `skip` (the held one, or -1) is ignored.
-double lowest_centre(const FootprintQuery& q, double target_z, double drop, int parts,
-                     int64_t skip) {
+// of the first `parts` work parts (at the target) would rest on the table, on the top of one
+// of the work boxes or of the fixtures' box parts (of the world whose bodies start at `first`)
+// under its footprint. A box counts as under a part if its top is below the part's bottom
+// before the move (the part's bottom at the target minus `drop`, the move's z, m); box `skip`
+// (the held one, or -1) is ignored.
+double lowest_centre(const FootprintQuery& q, int64_t first, double target_z, double drop,
+                     int parts, int64_t skip) {
     double lowest = -INF;
     for (int p = 0; p < parts; ++p) {
         const Box part = {q.parts_x[p], q.parts_r[p], q.parts_half[p]};
@@ -96,14 +120,18 @@ double lowest_centre(const FootprintQuery& q, double target_z, double drop, int 
         const double height = target_z - bottom;  // from this part's bottom to the pad's centre
         lowest = std::max(lowest, height);        // resting on the table (z = 0)
         for (int64_t k = 0; k < q.boxes_x.size; ++k) {
-            if (k == skip) {
-                continue;
+            if (k != skip) {
+                const Box box = {q.boxes_x[k], q.boxes_r[k], q.halves[k]};
+                lowest = std::max(lowest, resting_on(part, bottom, height, drop, box));
             }
-            const Box box = {q.boxes_x[k], q.boxes_r[k], q.halves[k]};
-            const double top = z_range(box).high;
-            if (top <= bottom - drop + FOOTPRINT_SLACK && footprints_overlap(part, box)) {
-                lowest = std::max(lowest, top + height);
-            }
+        }
+        for (int64_t k = 0; k < q.fixed_bodies.size; ++k) {
+            const int64_t body = first + q.fixed_bodies[k];
+            const Mat3& r = q.rotations[body];
+            const Vec3 centre = to_world(q.positions[body], r, q.fixed_offsets[k]);
+            const Mat3 rotation = product(r, q.fixed_rotations[k]);
+            const Box box = {centre, rotation, q.fixed_halves[k]};
+            lowest = std::max(lowest, resting_on(part, bottom, height, drop, box));
         }
     }
     return lowest;
@@ -132,7 +160,7 @@ void lowest_centres(const FootprintQuery& q, Span<double> out) {
             q.boxes_x[k] = q.positions[first + q.objects[k]];
             q.boxes_r[k] = q.rotations[first + q.objects[k]];
         }
-        out[w] = lowest_centre(q, target.z, target.z - pad.z, parts, h);
+        out[w] = lowest_centre(q, first, target.z, target.z - pad.z, parts, h);
     }
 }
 

@@ -2,8 +2,9 @@
 // it, or the box it holds, lands on the table or on top of another box.
 //
 // The gripper stops a downward move where the pad, or the object it holds, would rest on the
-// table (z = 0) or on the top of a free box under its footprint (envs/effector.py).
-// Footprints are the boxes' shadows on the table, compared by separating axes in the plane.
+// table (z = 0), on the top of a free box under its footprint, or on the top of a box part of a
+// static fixture under it (envs/effector.py). Footprints are the boxes' shadows on the table,
+// compared by separating axes in the plane.
 #pragma once
 
 #include <cstdint>
@@ -25,6 +26,13 @@ struct FootprintQuery {
     Span<const int64_t> objects;  // (K,) the boxes' body indices, the same in every world
     Span<const Vec3> halves;     // (K,) m, their half extents
     Span<const int64_t> held;    // (B,) the held box, an index into objects (-1: none)
+    // The fixtures' box parts, F of them: part i belongs to body fixed_bodies[i] (static), lies
+    // at fixed_offsets[i] and turned by fixed_rotations[i] in that body's frame, with half
+    // extents fixed_halves[i] (the same in every world; the body's pose is each world's).
+    Span<const int64_t> fixed_bodies;  // (F,)
+    Span<const Vec3> fixed_offsets;    // (F,) m
+    Span<const Mat3> fixed_rotations;  // (F,)
+    Span<const Vec3> fixed_halves;     // (F,) m
     // Work rows, overwritten world by world: the parts (the pad, then the held box) and the
     // boxes of the world in hand.
     Span<Vec3> parts_x;     // (2,) m
@@ -36,9 +44,10 @@ struct FootprintQuery {
 
 // For the gripper of every world: the lowest z (m) its centre may take at its target, into
 // out (B,). That is where one of its parts (the pad, and the object it holds, at the target)
-// would rest on the table or on the top of one of the boxes under its footprint. A box counts
-// as under a part if its top is below the part's bottom before the move (the part's bottom at
-// the target minus the move's z, m); the held box is ignored.
+// would rest on the table or on the top of one of the boxes, or of the fixtures' box parts,
+// under its footprint. A box counts as under a part if its top is below the part's bottom
+// before the move (the part's bottom at the target minus the move's z, m); the held box is
+// ignored.
 void lowest_centres(const FootprintQuery& query, Span<double> out);
 
 // One env step's command of every world's pad (the query's targets are ignored: the targets
@@ -66,6 +75,10 @@ struct Pads {
     Vec3 pad_half = {};          // m
     Array<int64_t> objects;      // (K,) the boxes' body indices, the same in every world
     Array<Vec3> halves;          // (K,) m, their half extents
+    Array<int64_t> fixed_bodies;  // (F,) the fixtures' box parts (FootprintQuery), F may be 0
+    Array<Vec3> fixed_offsets;    // (F,) m
+    Array<Mat3> fixed_rotations;  // (F,)
+    Array<Vec3> fixed_halves;     // (F,) m
     Vec3 low = {}, high = {};    // m, the workspace the pad's centre stays in
     double step_distance = 0;    // m of motion per unit, along each axis
     double step_time = 0;        // s, the env step
