@@ -80,3 +80,27 @@ def torque_free_flip_period(moments, omega0) -> float:
 
     _, lam, m, _ = _top_parameters(moments, omega0)
     return float(2.0 * ellipk(m) / lam)
+
+
+def pendulum_period(pivot_inertia: float, mass: float, distance: float, gravity: float,
+                    amplitude: float) -> float:
+    """Period (s) of a rigid (physical) pendulum released from rest at ``amplitude`` (rad):
+    moment of inertia ``pivot_inertia`` (kg m^2) about the pivot, ``mass`` (kg), centre of
+    mass ``distance`` (m) from the pivot, |g| ``gravity`` (m/s^2).
+
+    T = 4 sqrt(I / (m g d)) K(k), k = sin(amplitude / 2) (complete elliptic integral of the
+    first kind, ``scipy.special.ellipk`` of m = k^2); 2 pi sqrt(I / (m g d)) at small
+    amplitude, and a simple pendulum's 4 sqrt(L / g) K(k) for I = m L^2, d = L."""
+    from scipy.special import ellipk
+
+    k = np.sin(0.5 * amplitude)
+    return float(4.0 * np.sqrt(pivot_inertia / (mass * gravity * distance)) * ellipk(k * k))
+
+
+def arm_speed_past_motor(pivot_inertia: float, mass: float, distance: float, gravity: float,
+                         torque: float, angle: float) -> float:
+    """Angular speed (rad/s) of an arm released horizontal from rest and turning down about a
+    horizontal pivot against a constant opposing torque ``torque`` (N m), once it is ``angle``
+    (rad) below horizontal. Energy: I w^2 / 2 = m g d sin(angle) - torque angle."""
+    work = mass * gravity * distance * np.sin(angle) - torque * angle
+    return float(np.sqrt(2.0 * work / pivot_inertia))

@@ -66,6 +66,10 @@ class SolverConfig:
         the excess within the step that made it: overlap the velocity-level phases cannot
         see (the corner of a fast-turning box sweeping into a neighbour and out of it again
         within the step, separating at the predicted pose) is gone before anyone looks.
+    joint_passes: rounds of each joint stage (``src/solver/joints.h``), which solve every
+        joint's rows at once: the velocity solve's rounds of holding a motor or limit at its
+        bound, and pre-stabilisation's Newton steps (until every joint holds to 1e-12 m or
+        rad); 0 switches the joint stages off, where a scene has no joint.
     detect_every_pass: run the narrow phase again at the predicted poses in every pass of
         every impulse phase (the original GBF formulation) instead of finding each pair's
         contacts once per step and carrying their separations through the passes
@@ -83,10 +87,12 @@ class SolverConfig:
     detect_every_pass: bool = CORE_DEFAULTS.detect_every_pass
     keep_energy: bool = CORE_DEFAULTS.keep_energy
     overlap_correction: float = CORE_DEFAULTS.overlap_correction
+    joint_passes: int = CORE_DEFAULTS.joint_passes
 
     def __post_init__(self):
         for name, low, high in (("collision_passes", 0, 1000), ("contact_passes", 0, 1000),
-                                ("shock_sweeps", 0, 1000), ("box_edge_segments", 1, 64)):
+                                ("shock_sweeps", 0, 1000), ("box_edge_segments", 1, 64),
+                                ("joint_passes", 0, 1000)):
             integer(getattr(self, name), f"SolverConfig.{name}", low, high)
         if isinstance(self.overlap_correction, bool) or not isinstance(
                 self.overlap_correction, (int, float, np.floating)):
@@ -112,9 +118,9 @@ class SolverConfig:
     def for_scene(cls, scene: Scene, **overrides) -> SolverConfig:
         """The default configuration with what ``scene`` cannot need switched off (no shock
         propagation without gravity or when nothing can rest on anything: no dynamic body, or
-        one alone in empty space) and no collision phase when every restitution is 0 (impacts
-        are then the contact phase's alone; ``collision_passes``).
-        ``overrides`` (any field) win over both."""
+        one alone in empty space), no collision phase when every restitution is 0 (impacts
+        are then the contact phase's alone; ``collision_passes``) and no joint stages without
+        a joint (``joint_passes`` 0). ``overrides`` (any field) win over all of these."""
         known = {f.name for f in fields(cls)}
         unknown = set(overrides) - known
         if unknown:
@@ -127,6 +133,8 @@ class SolverConfig:
         supports = len(scene.bodies) - dynamic
         if not np.any(scene.gravity) or dynamic == 0 or (dynamic == 1 and supports == 0):
             derived["shock_sweeps"] = 0
+        if not scene.joints:
+            derived["joint_passes"] = 0
         return cls(**{**derived, **overrides})
 
     def settings(self, sweep: bool = False) -> _core.Settings:
@@ -134,15 +142,17 @@ class SolverConfig:
         phase by sort and sweep or not (``sweep`` as ``collision.uses_sweep`` decides it)."""
         s = _core.Settings()
         for name in ("collision_passes", "contact_passes", "shock_sweeps", "rotation_order",
-                     "sleep", "detect_every_pass", "keep_energy"):
+                     "sleep", "detect_every_pass", "keep_energy", "joint_passes"):
             setattr(s, name, getattr(self, name))
         s.sleep_speed = float(self.sleep_speed)
         s.overlap_correction = float(self.overlap_correction)
         s.sweep = bool(sweep)
         return s
 
-    def phases(self, gravity: bool = True) -> dict[str, bool]:
+    def phases(self, gravity: bool = True, joints: bool = True) -> dict[str, bool]:
         """Which stages of the step run, by name, in step order (the core's rules:
         ``_core.stage_rules``). Shock propagation orders bodies along gravity, so without
-        gravity (``gravity=False``) it never runs."""
-        return dict(zip(_core.STAGES, _core.stage_rules(self.settings(), bool(gravity))))
+        gravity (``gravity=False``) it never runs; the joint stages run only where the scene
+        has joints (``joints``)."""
+        return dict(zip(_core.STAGES, _core.stage_rules(self.settings(), bool(gravity),
+                                                        bool(joints))))

@@ -20,6 +20,7 @@ from rigid_gym import quaternion as quat
 from rigid_gym._core import DYNAMIC, KINEMATIC, STATIC
 from rigid_gym.checks import in_range, vector
 from rigid_gym.inertia import MassProperties, inverse_moments, mass_properties, principal_axes
+from rigid_gym.joints import FIXED, PRISMATIC, REVOLUTE, JointSpec, body_reference, make_joint
 from rigid_gym.shapes import SOLID_SHAPES, Plane, Pose
 
 MOTION_NAMES = {STATIC: "static", KINEMATIC: "kinematic", DYNAMIC: "dynamic"}
@@ -67,7 +68,8 @@ class BodySpec:
 
 
 class Scene:
-    """A list of bodies plus gravity. Build it, then hand it to :class:`rigid_gym.World`.
+    """A list of bodies and joints plus gravity. Build it, then hand it to
+    :class:`rigid_gym.World`.
 
     gravity: (3,) m/s^2, world frame (z up).
     """
@@ -75,6 +77,7 @@ class Scene:
     def __init__(self, gravity=(0.0, 0.0, -9.81)):
         self.gravity = vector(gravity, 3, "Scene.gravity")
         self.bodies: list[BodySpec] = []
+        self.joints: list[JointSpec] = []
 
     # -- building -------------------------------------------------------------------------
 
@@ -145,6 +148,56 @@ class Scene:
             raise ValueError(f"{where}: a static body cannot have a velocity")
         self.bodies.append(spec)
         return index
+
+    def add_revolute_joint(self, body_a, body_b, anchor, axis, *, limits=None,
+                           motor_speed: float = 0.0, max_motor_torque: float = 0.0,
+                           name: str | None = None) -> int:
+        """Hinge dynamic ``body_a`` to ``body_b`` (a body, or None for the world) about
+        ``axis`` through ``anchor``; returns the joint's index (``rigid_gym.joints`` gives the
+        conventions).
+
+        body_a, body_b: index or name. anchor (3,) m and axis (3,) (any nonzero length),
+            world frame at the scene's initial poses.
+        limits: None or (lower, upper) rad in [-pi, pi], lower <= upper: the angle of a
+            relative to b about the axis, 0 at the initial poses.
+        motor_speed: rad/s the motor drives that angle's rate towards, with at most
+            ``max_motor_torque`` N m (0: no motor).
+        """
+        return self.add_joint(make_joint(self, REVOLUTE, body_a, body_b, anchor, axis, limits,
+                                         motor_speed, max_motor_torque, name))
+
+    def add_prismatic_joint(self, body_a, body_b, anchor, axis, *, limits=None,
+                            motor_speed: float = 0.0, max_motor_force: float = 0.0,
+                            name: str | None = None) -> int:
+        """Let dynamic ``body_a`` slide along ``axis`` relative to ``body_b`` (a body, or None
+        for the world), without turning relative to it; returns the joint's index.
+
+        body_a, body_b: index or name. anchor (3,) m: a point of a, world frame, which stays
+            on the line through it along ``axis`` (3,), fixed in b.
+        limits: None or (lower, upper) m, lower <= upper: the travel of the anchor along the
+            axis, 0 at the initial poses.
+        motor_speed: m/s the motor drives the travel's rate towards, with at most
+            ``max_motor_force`` N (0: no motor).
+        """
+        return self.add_joint(make_joint(self, PRISMATIC, body_a, body_b, anchor, axis, limits,
+                                         motor_speed, max_motor_force, name))
+
+    def add_fixed_joint(self, body_a, body_b, anchor=None, *, name: str | None = None) -> int:
+        """Weld dynamic ``body_a`` to ``body_b`` (a body, or None for the world) at their
+        initial relative pose; returns the joint's index. anchor (3,) m, world frame: the
+        point whose two copies, one in each body, the joint holds together (default body_a's
+        centre of mass); with the orientations held too, the weld is rigid wherever it is."""
+        a = body_reference(self, body_a, "fixed joint: body_a", allow_world=False)
+        point = self.bodies[a].position if anchor is None else anchor
+        return self.add_joint(make_joint(self, FIXED, a, body_b, point, None, None, 0.0, 0.0,
+                                         name))
+
+    def add_joint(self, joint: JointSpec) -> int:
+        """Add a JointSpec made by ``rigid_gym.joints.make_joint`` for this scene."""
+        if not isinstance(joint, JointSpec) or joint.index != len(self.joints):
+            raise ValueError("Scene.add_joint: expected the next JointSpec of this scene")
+        self.joints.append(joint)
+        return joint.index
 
     # -- queries ----------------------------------------------------------------------------
 

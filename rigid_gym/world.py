@@ -28,6 +28,7 @@ from rigid_gym.checks import in_range, integer
 from rigid_gym.collision import Contacts, uses_sweep
 from rigid_gym.config import SolverConfig
 from rigid_gym.geometry import compile_geometry, max_pair_contacts
+from rigid_gym.joints import FIXED, REVOLUTE, joint_model, joint_settings, limits_of
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Compound, Mesh
 
@@ -60,6 +61,17 @@ class Attachments(NamedTuple):
     parent: np.ndarray
     offset_position: np.ndarray
     offset_orientation: np.ndarray
+
+
+class JointImpulses(NamedTuple):
+    """What each joint transmitted to its body_a over the last step, leading world axis
+    where batched: impulse ([B,] J, 3) N s and angular_impulse ([B,] J, 3) N m s about a's
+    centre of mass (world frame), both including the pre-stabilisation's share; motor
+    ([B,] J) N m s or N s, the motor's part along the joint's axis (within max_motor dt)."""
+
+    impulse: np.ndarray
+    angular_impulse: np.ndarray
+    motor: np.ndarray
 
 
 class Model(NamedTuple):
@@ -117,6 +129,12 @@ class World:
         self.core = _core.Batch(self.num_worlds, self.geometry._asdict(), motion,
                                 tuple(scene.gravity.tolist()), self.config.settings(sweep),
                                 max_pair_contacts(self.geometry))
+        if scene.joints:
+            if self.config.joint_passes == 0:
+                raise ValueError("World: the scene has joints but config.joint_passes is 0 "
+                                 "(the joint stages off); give joint_passes >= 1")
+            self.core.set_joints(*joint_model(scene.joints))
+            self._load_joint_settings(scene, slice(None))
         c = self.core
         self.state = State(**{name: getattr(c, name) for name in _core.STATE})
         self.model = Model(motion, *self._materials(), scene.gravity.copy())
@@ -173,6 +191,13 @@ class World:
             raise ValueError("World.load: the scene needs another SolverConfig.for_scene than "
                              f"this world's ({SolverConfig.for_scene(scene)} vs {self.config}); "
                              "give the World an explicit config to load such scenes")
+        if len(scene.joints) != len(self.scene.joints) or not all(
+                np.array_equal(mine, theirs) for mine, theirs in
+                zip(joint_model(self.scene.joints), joint_model(scene.joints))):
+            raise ValueError("World.load: the scene's joints differ from the world's scene's in "
+                             "kind, bodies, anchors or axes; only their limits and motors may "
+                             "change between worlds")
+        self._load_joint_settings(scene, w)
         for current, new in zip(self._materials(), _build_model(scene, 1)[1:5]):
             current[w] = new[0]
         for current, new in zip(self.state, _build_state(scene, 1)):
@@ -224,6 +249,13 @@ class World:
     def time(self) -> float:
         """Simulated time, s (steps * dt)."""
         return self.steps * self.dt
+
+    def _load_joint_settings(self, scene: Scene, worlds) -> None:
+        """The limits and motors of ``scene``'s joints into ``worlds`` (a slice or an index)."""
+        c = self.core
+        for current, new in zip((c.joint_lower, c.joint_upper, c.joint_motor_speed,
+                                 c.joint_max_motor), joint_settings(scene.joints)):
+            current[worlds] = new
 
     # -- state views -------------------------------------------------------------------------
 
@@ -340,6 +372,50 @@ class World:
         that did not touch); copies."""
         a, b, impulse = self.core.pairs(self._worlds(world, "listed_pairs"))
         return np.stack([a, b], axis=1), impulse
+
+    def joint_coordinates(self) -> np.ndarray:
+        """([B,] J) each joint's coordinate at the current poses (``rigid_gym.joints``): rad
+        for a revolute joint (in (-pi, pi]), m for a prismatic one, 0 for a fixed one."""
+        values = self.core.joint_coordinates()
+        return values if self.batched else values[0]
+
+    def joint_impulses(self) -> JointImpulses:
+        """What each joint transmitted to its body_a over the last step (body_b took the
+        opposite): see :class:`JointImpulses`; copies. Divided by dt they are the mean
+        reaction force (N) and torque (N m)."""
+        rows = (self.core.joint_impulse, self.core.joint_angular_impulse,
+                self.core.joint_motor_impulse)
+        return JointImpulses(*(rows if self.batched else (r[0] for r in rows)))
+
+    def set_joint_motor(self, joint: int, speed=None, max_motor=None,
+                        world: int | None = None) -> None:
+        """Set joint ``joint``'s motor: target ``speed`` (rad/s revolute, m/s prismatic) and/or
+        ``max_motor`` (N m or N, >= 0; 0 switches it off); what is not given stays.
+        ``world``: which world (None = all; values may then be (B,) for one per world)."""
+        j = self._joint(joint, "set_joint_motor")
+        worlds = self._worlds(world, "set_joint_motor")
+        self.core.forget(*self._range(worlds))
+        if speed is not None:
+            self.core.joint_motor_speed[worlds, j] = self._scalars(
+                speed, "speed", "set_joint_motor", worlds, -np.inf, np.inf)
+        if max_motor is not None:
+            self.core.joint_max_motor[worlds, j] = self._scalars(
+                max_motor, "max_motor", "set_joint_motor", worlds, 0.0, np.inf,
+                unit="N m" if self.scene.joints[j].kind == REVOLUTE else "N")
+
+    def set_joint_limits(self, joint: int, limits, world: int | None = None) -> None:
+        """Set joint ``joint``'s limits: None (none) or (lower, upper), rad in [-pi, pi]
+        (revolute) or m (prismatic), lower <= upper. ``world``: which world (None = all)."""
+        j = self._joint(joint, "set_joint_limits")
+        spec = self.scene.joints[j]
+        if spec.kind == FIXED:
+            raise ValueError(f"World.set_joint_limits: joint {j} ({spec.name!r}) is fixed and "
+                             "has no coordinate to limit")
+        worlds = self._worlds(world, "set_joint_limits")
+        lower, upper = limits_of(limits, spec.kind, f"World.set_joint_limits: joint {j}")
+        self.core.forget(*self._range(worlds))
+        self.core.joint_lower[worlds, j] = lower
+        self.core.joint_upper[worlds, j] = upper
 
     def sleeping(self) -> np.ndarray:
         """([B,] n) bool: the bodies that slept through the last step (SolverConfig.sleep)."""
@@ -518,6 +594,18 @@ class World:
         if isinstance(body, str):
             return self.scene.index(body)
         return integer(body, f"World.{method}: body", 0, n - 1, other="a name")
+
+    def _joint(self, joint, method: str) -> int:
+        if isinstance(joint, str):
+            for spec in self.scene.joints:
+                if spec.name == joint:
+                    return spec.index
+            raise ValueError(f"World.{method}: no joint named {joint!r}; joints: "
+                             f"{[spec.name for spec in self.scene.joints]}")
+        if not self.scene.joints:
+            raise ValueError(f"World.{method}: the scene has no joint")
+        return integer(joint, f"World.{method}: joint", 0, len(self.scene.joints) - 1,
+                       other="a name")
 
     def _worlds(self, world, method: str):
         if world is None:

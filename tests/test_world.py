@@ -143,9 +143,10 @@ def test_mesh_body_is_stored_at_its_centre_of_mass_in_its_principal_frame():
 
 
 STAGES = ["sleep_check", "prepare", "broad_phase", "sleep_islands", "collision",
-          "update_velocities", "contact", "shock_propagation", "relist", "overlap_correction",
-          "update_positions", "sleep_records"]
+          "update_velocities", "joint_velocity", "contact", "shock_propagation", "joint_position",
+          "relist", "overlap_correction", "update_positions", "joint_projection", "sleep_records"]
 SLEEP_STAGES = ["sleep_check", "sleep_islands", "sleep_records"]
+JOINT_STAGES = ["joint_velocity", "joint_position", "joint_projection"]
 
 
 def test_profile_reports_every_stage_timed_inside_the_step():
@@ -168,7 +169,7 @@ def test_profile_reports_every_stage_timed_inside_the_step():
     plain.step(5)
     profile = timed.profile()
     assert list(profile) == STAGES == list(_core.STAGES)
-    off = ["collision", *SLEEP_STAGES]
+    off = ["collision", *SLEEP_STAGES, *JOINT_STAGES]
     assert not any(profile[name]["on"] for name in off)
     assert all(profile[name]["calls"] == 0 and profile[name]["seconds"] == 0.0 for name in off)
     ran = [name for name in STAGES if name not in off]
@@ -198,22 +199,26 @@ def test_settings_cross_to_the_core_as_one_bound_struct():
     """SolverConfig's defaults are the core's (src/solver/settings.h), every field it hands the
     core arrives by name, and the stages it reports on are the core's rules for them: the same
     the World's batch steps by (shock propagation off without gravity, the broad phase off
-    without any impulse stage, the sleep stages with sleeping)."""
+    without any impulse stage, the sleep stages with sleeping, the joint stages with joints)."""
     defaults, config = _core.Settings(), rg.SolverConfig()
     for name in ("collision_passes", "contact_passes", "shock_sweeps", "rotation_order",
                  "sleep", "sleep_speed", "detect_every_pass", "keep_energy",
-                 "overlap_correction"):
+                 "overlap_correction", "joint_passes"):
         assert getattr(config, name) == getattr(defaults, name), name
     custom = rg.SolverConfig(collision_passes=3, contact_passes=0, shock_sweeps=0,
                              rotation_order=3, sleep=False, sleep_speed=0.02,
-                             detect_every_pass=True, keep_energy=False, overlap_correction=0.5)
+                             detect_every_pass=True, keep_energy=False, overlap_correction=0.5,
+                             joint_passes=7)
     settings = custom.settings(sweep=True)
     assert (settings.collision_passes, settings.contact_passes, settings.shock_sweeps,
             settings.rotation_order, settings.sleep, settings.sleep_speed,
             settings.detect_every_pass, settings.keep_energy, settings.overlap_correction,
-            settings.sweep) == (3, 0, 0, 3, False, 0.02, True, False, 0.5, True)
+            settings.joint_passes, settings.sweep) == (3, 0, 0, 3, False, 0.02, True, False,
+                                                       0.5, 7, True)
     assert list(config.phases()) == list(_core.STAGES)
     assert config.phases(gravity=False)["shock_propagation"] is False
+    assert not any(config.phases(joints=False)[name] for name in JOINT_STAGES)
+    assert all(config.phases()[name] for name in JOINT_STAGES)
     off = rg.SolverConfig(collision_passes=0, contact_passes=0, shock_sweeps=0, sleep=False)
     assert [name for name, on in off.phases().items() if not on] == [
         "sleep_check", "broad_phase", "sleep_islands", "collision", "contact",
@@ -223,7 +228,7 @@ def test_settings_cross_to_the_core_as_one_bound_struct():
     floating.add_body(rg.Sphere(0.05), mass=1.0, position=(0.2, 0.0, 0.0))
     world = rg.World(floating, config=config)
     assert tuple(p["on"] for p in world.profile().values()) == world.core.stages
-    assert world.core.stages == tuple(config.phases(gravity=False).values())
+    assert world.core.stages == tuple(config.phases(gravity=False, joints=False).values())
 
 
 def test_the_state_layout_is_the_cores():
@@ -249,9 +254,10 @@ def test_profile_counts_skipped_and_repeated_stages():
     flying.step(5)
     calls = {name: p["calls"] for name, p in flying.profile().items()}
     assert calls == {"sleep_check": 5, "prepare": 5, "broad_phase": 5, "sleep_islands": 5,
-                     "collision": 0, "update_velocities": 5, "contact": 0,
-                     "shock_propagation": 0, "relist": 5, "overlap_correction": 0,
-                     "update_positions": 5, "sleep_records": 5}
+                     "collision": 0, "update_velocities": 5, "joint_velocity": 0, "contact": 0,
+                     "shock_propagation": 0, "joint_position": 0, "relist": 5,
+                     "overlap_correction": 0, "update_positions": 5, "joint_projection": 0,
+                     "sleep_records": 5}
 
     scene = rg.Scene()
     scene.add_ground()

@@ -134,9 +134,9 @@ def phase_saving(case: Case, dt: float, repeats: int) -> dict:
     world = results["for_scene"][0]
     profiled = rg.World(world.scene, dt=dt, config=world.config, profile=True)
     profiled.step(world.steps)
-    gravity = bool(np.any(world.model.gravity))
-    on = world.config.phases(gravity)
-    all_on = rg.SolverConfig().phases(gravity)
+    gravity, joints = bool(np.any(world.model.gravity)), bool(world.scene.joints)
+    on = world.config.phases(gravity, joints)
+    all_on = rg.SolverConfig().phases(gravity, joints)
     return {"left_out": [p for p in on if all_on[p] and not on[p]],
             "cost": results["for_scene"][2], "cost_all_on": results["all_on"][2],
             "error": results["for_scene"][1], "error_all_on": results["all_on"][1],

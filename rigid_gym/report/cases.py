@@ -272,6 +272,108 @@ def push_tip_error(world: rg.World) -> tuple[float]:
     return (abs(travel) if np.degrees(tilt) >= TIP_DEG else float("nan"),)
 
 
+PENDULUM_SMALL, PENDULUM_WIDE = 0.05, 0.5 * np.pi  # rad
+PERIOD_CROSSINGS = 4
+
+
+def period_error(world: rg.World, exact: float) -> float:
+    """|T - exact| / exact, T twice the mean time between the first PERIOD_CROSSINGS passes
+    of body 0's centre through x = 0 (below the pivot), each found by linear interpolation
+    between steps."""
+    crossings: list[float] = []
+    previous = world.position[0, 0]
+    while len(crossings) < PERIOD_CROSSINGS and world.time < 2.0 * PERIOD_CROSSINGS * exact:
+        world.step()
+        x = world.position[0, 0]
+        if (previous > 0.0) != (x > 0.0):
+            crossings.append(world.time - world.dt * x / (x - previous))
+        previous = x
+    if len(crossings) < PERIOD_CROSSINGS:
+        return float("nan")
+    return abs(2.0 * float(np.mean(np.diff(crossings))) / exact - 1.0)
+
+
+def pendulum_case(amplitude: float) -> Case:
+    inertia = 1.0 * (scenes.PENDULUM_LENGTH ** 2 + 0.4 * scenes.PENDULUM_BOB ** 2)
+    exact = analytic.pendulum_period(inertia, 1.0, scenes.PENDULUM_LENGTH, G, amplitude)
+    return Case(f"pendulum_{np.degrees(amplitude):.0f}deg",
+                f"pendulum, 1 kg bob (r = 1 cm) on a revolute joint 1 m below the pivot, "
+                f"released at {np.degrees(amplitude):.3g} deg",
+                "T = 4 sqrt(I / (m g L)) K(sin(theta0 / 2)), I = m (L^2 + 2 r^2 / 5)",
+                ("period, relative error",), lambda: scenes.pendulum(amplitude),
+                lambda world: (period_error(world, exact),), {"default": {}},
+                "the joint stages are RATTLE (src/solver/joints.h): a symplectic scheme whose "
+                "period error is second order in dt; the bob's own inertia is in I (4e-5 of "
+                "m L^2)." if amplitude < 0.1 else
+                "the elliptic integral: 18% longer than the small-amplitude period; energy "
+                "oscillates by O(dt) (the velocity update is symplectic Euler) and does not "
+                "drift.")
+
+
+ROD_AMPLITUDE = 0.05  # rad
+
+
+def physical_pendulum_error(world: rg.World) -> tuple[float]:
+    """The rod's period against 4 sqrt(I / (m g d)) K(sin(theta0 / 2)) (2 pi sqrt(I / (m g
+    d)) to 1.6e-4 at 0.05 rad), I about the pivot, d = 0.25 m."""
+    hx, _, hz = scenes.ROD_HALF
+    inertia = (hx * hx + hz * hz) / 3.0 + hz * hz  # about its centre (1 kg), moved to its end
+    return (period_error(world, analytic.pendulum_period(inertia, 1.0, hz, G, ROD_AMPLITUDE)),)
+
+
+ARM_HOLD, ARM_GIVE = 1.5, 0.5  # the motor's maximum torque in units of the arm's m g d
+ARM_SECONDS, ARM_ANGLE = 1.0, np.radians(30.0)
+
+
+def arm_torque() -> float:
+    """m g d of the motor arm (1 kg, d = half its length), N m."""
+    return 1.0 * G * scenes.ARM_HALF[0]
+
+
+def motor_hold_error(world: rg.World) -> tuple[float]:
+    """|angle| (rad) the arm turns in ARM_SECONDS while its motor (max ARM_HOLD m g d, target
+    speed 0) holds it: exact 0."""
+    world.step(round(ARM_SECONDS / world.dt))
+    return (abs(float(world.joint_coordinates()[0])),)
+
+
+def motor_give_error(world: rg.World) -> tuple[float]:
+    """The arm's angular speed when it has turned ARM_ANGLE down against its motor at full
+    torque (max ARM_GIVE m g d < m g d), against energy's sqrt(2 (m g d sin a - tau a) / I),
+    relative; both interpolated to ARM_ANGLE between steps."""
+    hx, _, hz = scenes.ARM_HALF
+    inertia = (hx * hx + hz * hz) / 3.0 + hx * hx
+    exact = analytic.arm_speed_past_motor(inertia, 1.0, hx, G, ARM_GIVE * arm_torque(),
+                                          ARM_ANGLE)
+    angle, speed = 0.0, 0.0
+    while world.time < 2.0:
+        world.step()
+        now, spin = float(world.joint_coordinates()[0]), float(world.angular_velocity[0, 1])
+        if now >= ARM_ANGLE:
+            reached = speed + (spin - speed) * (ARM_ANGLE - angle) / (now - angle)
+            return (abs(reached / exact - 1.0),)
+        angle, speed = now, spin
+    return (float("nan"),)
+
+
+SLIDER_DEG = 30.0
+
+
+def slider_errors(world: rg.World) -> tuple[float, float]:
+    """A cube on a frictionless prismatic joint along a 30 deg slope: |a / (g sin theta) - 1|,
+    a from the velocity change between t = 0.5 and 1 s; and its centre's largest distance
+    (m) from the line at the end (exact 0)."""
+    theta = np.radians(SLIDER_DEG)
+    axis = np.array([np.cos(theta), 0.0, -np.sin(theta)])
+    half = round(0.5 / world.dt)
+    world.step(half)
+    v0 = float(world.velocity[0] @ axis)
+    world.step(half)
+    a = (float(world.velocity[0] @ axis) - v0) / (half * world.dt)
+    off = world.position[0] - (world.position[0] @ axis) * axis
+    return (abs(a / (G * np.sin(theta)) - 1.0), float(np.linalg.norm(off)))
+
+
 CASES = (
     Case("free_fall", "ball in free flight for 1 s", "x0 + v0 t + g t^2 / 2",
          ("position, relative error",), scenes.free_ball, free_fall_error, {"default": {}}),
@@ -323,6 +425,25 @@ CASES = (
          f"mu = {PUSH_TIP_MU:g}", "tips about a fixed edge: travel 0",
          (f"edge travel by {TIP_DEG:g} deg of tilt, m",),
          lambda: scenes.standing_block(PUSH_TIP_MU), push_tip_error, PASS_SETTINGS),
+    pendulum_case(PENDULUM_SMALL),
+    pendulum_case(PENDULUM_WIDE),
+    Case("physical_pendulum", f"rod 0.5 m, 1 kg, hinged at its end, released at "
+         f"{ROD_AMPLITUDE:g} rad", "T = 2 pi sqrt(I / (m g d)) (with K(sin(theta0 / 2)))",
+         ("period, relative error",), lambda: scenes.physical_pendulum(ROD_AMPLITUDE),
+         physical_pendulum_error, {"default": {}}),
+    Case("motor_hold", f"arm 0.4 m, 1 kg, held horizontal by a revolute motor of max "
+         f"{ARM_HOLD:g} m g d, {ARM_SECONDS:g} s", "held: turn 0", ("turn, rad",),
+         lambda: scenes.motor_arm(ARM_HOLD * arm_torque()), motor_hold_error, {"default": {}},
+         "the motor's impulse is bounded by max torque x dt over the step; the arm's weight "
+         "needs m g d dt, within it, so the velocity solve holds the joint's rate at 0."),
+    Case("motor_give", f"the same arm, motor of max {ARM_GIVE:g} m g d: it gives way",
+         "w(30 deg) = sqrt(2 (m g d sin a - tau a) / I)", ("speed at 30 deg, relative error",),
+         lambda: scenes.motor_arm(ARM_GIVE * arm_torque()), motor_give_error, {"default": {}},
+         "the motor pushes back with its full torque all the way (its target speed 0 is "
+         "never reached): energy gives the speed at any angle."),
+    Case("slider", f"cube on a frictionless prismatic joint along a {SLIDER_DEG:g} deg slope",
+         "a = g sin theta", ("acceleration, relative error", "distance from the line, m"),
+         lambda: scenes.slider(SLIDER_DEG), slider_errors, {"default": {}}),
     Case("stack_drift", f"{STACK_COUNT}-cube stack resting for {STACK_SECONDS:g} s", "at rest: drift 0",
          ("largest displacement, m",), lambda: scenes.cube_stack(STACK_COUNT), stack_drift,
          {**PASS_SETTINGS, "no shock propagation": {"shock_sweeps": 0}}),

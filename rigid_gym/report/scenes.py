@@ -171,3 +171,78 @@ def dropped_cubes(height: float, on_cube: bool = False) -> rg.Scene:
                    position=(0.0, 0.0, base + CUBE_HALF + height))
     return scene
 
+
+
+PENDULUM_LENGTH, PENDULUM_BOB = 1.0, 0.01  # m: pivot to the bob's centre, bob radius
+
+
+def pendulum(amplitude: float) -> rg.Scene:
+    """A 1 kg sphere of radius PENDULUM_BOB hinged to the world at the origin about y by a
+    revolute joint, its centre PENDULUM_LENGTH below the pivot turned out by ``amplitude``
+    (rad), at rest. Body 0; joint 0."""
+    scene = rg.Scene()
+    bob = scene.add_body(rg.Sphere(PENDULUM_BOB), mass=1.0,
+                         position=(PENDULUM_LENGTH * np.sin(amplitude), 0.0,
+                                   -PENDULUM_LENGTH * np.cos(amplitude)))
+    scene.add_revolute_joint(bob, None, (0.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+    return scene
+
+
+ROD_HALF = (0.01, 0.01, 0.25)  # m: a 0.5 m rod of square section
+
+
+def physical_pendulum(amplitude: float) -> rg.Scene:
+    """A 1 kg rod (half extents ROD_HALF, long along its z) hinged about y at one end to the
+    world at the origin, hanging turned out by ``amplitude`` (rad), at rest. Body 0."""
+    scene = rg.Scene()
+    turn = np.array([np.cos(0.5 * amplitude), 0.0, -np.sin(0.5 * amplitude), 0.0])
+    centre = ROD_HALF[2] * np.array([np.sin(amplitude), 0.0, -np.cos(amplitude)])
+    rod = scene.add_body(rg.Box(ROD_HALF), mass=1.0, position=centre, orientation=turn)
+    scene.add_revolute_joint(rod, None, (0.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+    return scene
+
+
+ARM_HALF = (0.2, 0.02, 0.02)  # m: a 0.4 m arm along x
+
+
+def motor_arm(max_torque: float) -> rg.Scene:
+    """A 1 kg arm (half extents ARM_HALF) held horizontal along +x from a revolute joint about
+    y at its end (the world origin), whose motor (target speed 0) has ``max_torque`` (N m).
+    Gravity turns it down with m g d = 1.962 N m. Body 0."""
+    scene = rg.Scene()
+    arm = scene.add_body(rg.Box(ARM_HALF), mass=1.0, position=(ARM_HALF[0], 0.0, 0.0))
+    scene.add_revolute_joint(arm, None, (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), motor_speed=0.0,
+                             max_motor_torque=max_torque)
+    return scene
+
+
+def slider(theta_deg: float) -> rg.Scene:
+    """A 1 kg standard cube on a frictionless prismatic joint to the world along a line
+    ``theta_deg`` below horizontal (in the x-z plane, descending along +x), at rest. Body 0."""
+    theta = np.radians(theta_deg)
+    scene = rg.Scene()
+    cube = scene.add_body(rg.Box((CUBE_HALF,) * 3), mass=1.0, position=(0.0, 0.0, 0.0))
+    scene.add_prismatic_joint(cube, None, (0.0, 0.0, 0.0), (np.cos(theta), 0.0, -np.sin(theta)))
+    return scene
+
+
+CHAIN_LINKS, CHAIN_LINK = 10, 0.1  # m: each link's length, joint to joint
+
+
+def hanging_chain(angle: float, links: int = CHAIN_LINKS) -> rg.Scene:
+    """``links`` 0.1 kg links (boxes 0.09 x 0.02 x 0.02 m, CHAIN_LINK apart) joined end to end
+    by revolute joints about y, the first hinged to the world at the origin, hanging straight
+    and turned out by ``angle`` (rad) from the vertical, at rest. Links are bodies 0..links-1;
+    joint k holds link k to link k - 1 (the world for k = 0)."""
+    scene = rg.Scene()
+    down = np.array([np.sin(angle), 0.0, -np.cos(angle)])
+    # the link's long axis x turned onto `down`: a turn about y by pi/2 - angle
+    half = 0.5 * (0.5 * np.pi - angle)
+    turn = np.array([np.cos(half), 0.0, np.sin(half), 0.0])
+    previous = None
+    for k in range(links):
+        link = scene.add_body(rg.Box((0.45 * CHAIN_LINK, 0.01, 0.01)), mass=0.1,
+                              position=(k + 0.5) * CHAIN_LINK * down, orientation=turn)
+        scene.add_revolute_joint(link, previous, k * CHAIN_LINK * down, (0.0, 1.0, 0.0))
+        previous = link
+    return scene

@@ -78,5 +78,6 @@ private:
 // that the struct of one world's Spans, the batch's Arrays, their allocation and their views
 // are all written from it (solver/world.h). These expand an entry into a member.
 #define RG_SPAN_FIELD(type, name, count, fill) ::rg::Span<type> name;
+#define RG_CONST_SPAN_FIELD(type, name, count, fill) ::rg::Span<const type> name;
 #define RG_ARRAY_FIELD(type, name, count, fill) ::rg::Array<type> name;
 #define RG_POINTER_FIELD(type, name, count, fill) type* name;  // rows 1: one value per world

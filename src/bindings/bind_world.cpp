@@ -7,6 +7,7 @@
 
 #include "bindings/arrays.h"
 #include "solver/integrate.h"
+#include "solver/joints.h"
 #include "solver/queries.h"
 #include "solver/stages.h"
 #include "solver/step.h"
@@ -100,7 +101,8 @@ void bind_settings(nb::module_& m) {
         .def_rw("sleep_speed", &Settings::sleep_speed)
         .def_rw("detect_every_pass", &Settings::detect_every_pass)
         .def_rw("keep_energy", &Settings::keep_energy)
-        .def_rw("overlap_correction", &Settings::overlap_correction);
+        .def_rw("overlap_correction", &Settings::overlap_correction)
+        .def_rw("joint_passes", &Settings::joint_passes);
     nb::list stages;
     for (const char* name : STAGE_NAMES) {
         stages.append(name);
@@ -108,18 +110,124 @@ void bind_settings(nb::module_& m) {
     m.attr("STAGES") = nb::tuple(stages);  // the step's stages in order (src/solver/stages.h)
     m.def(
         "stage_rules",
-        [](const Settings& settings, bool gravity) {
-            const StageSwitches on = stage_rules(settings, gravity);
+        [](const Settings& settings, bool gravity, bool joints) {
+            const StageSwitches on = stage_rules(settings, gravity, joints);
             nb::list out;
             for (bool stage_on : on) {
                 out.append(stage_on);
             }
             return nb::tuple(out);
         },
-        nb::arg("settings"), nb::arg("gravity"),
-        "Which stages (STAGES' order) the steps of a scene with or without gravity run under "
-        "these settings (src/solver/stages.h); one switched on still skips a step in which it "
+        nb::arg("settings"), nb::arg("gravity"), nb::arg("joints"),
+        "Which stages (STAGES' order) the steps of a scene with or without gravity and joints "
+        "run under these settings (src/solver/stages.h); one switched on still skips a step in which it "
         "has nothing to do.");
+}
+
+// A read-write numpy view (B, J) of one of the batch's per-world joint rows.
+void def_joint_view(Context& cls, const char* name, Array<double> JointBuffers::*field,
+                    const char* doc) {
+    cls.def_prop_ro(name, [field](nb::handle self) {
+        Batch& c = nb::cast<Batch&>(self);
+        const size_t b = c.num_worlds(), j = c.joints.size();
+        return view<double>(self, (c.joints.*field).data(), {b, j});
+    }, nb::rv_policy::reference, doc);
+}
+
+// A copy (B, J, 3) of per-world joint vectors.
+nb::ndarray<nb::numpy, double> joint_vectors(const Batch& c, const Array<Vec3>& rows) {
+    const double* first = reinterpret_cast<const double*>(rows.data());
+    std::vector<double> values(first, first + 3 * rows.size());
+    return hand_over(std::move(values), {static_cast<size_t>(c.num_worlds()),
+                                         static_cast<size_t>(c.joints.size()), 3});
+}
+
+// The joints' model read into the batch (Batch::set_joints), checked for shape and bodies
+// (the values were validated by rigid_gym.Scene).
+void set_joints(Batch& c, InArray<int32_t> kind, InArray<int32_t> body_a,
+                InArray<int32_t> body_b, InArray<double> anchor_a, InArray<double> anchor_b,
+                InArray<double> axis_a, InArray<double> axis_b, InArray<double> reference) {
+    Array<int32_t> kinds = read_rows<int32_t>(kind, {}, "joint kind");
+    Array<int32_t> a = read_rows<int32_t>(body_a, {}, "joint body_a");
+    Array<int32_t> b = read_rows<int32_t>(body_b, {}, "joint body_b");
+    Array<Vec3> pa = read_rows<Vec3>(anchor_a, {3}, "joint anchor_a");
+    Array<Vec3> pb = read_rows<Vec3>(anchor_b, {3}, "joint anchor_b");
+    Array<Vec3> ua = read_rows<Vec3>(axis_a, {3}, "joint axis_a");
+    Array<Vec3> ub = read_rows<Vec3>(axis_b, {3}, "joint axis_b");
+    Array<Quat> q = read_rows<Quat>(reference, {4}, "joint reference");
+    const int64_t j = kinds.size();
+    if (a.size() != j || b.size() != j || pa.size() != j || pb.size() != j || ua.size() != j ||
+        ub.size() != j || q.size() != j) {
+        throw nb::value_error("Batch.set_joints: the joint rows differ in length");
+    }
+    for (int64_t k = 0; k < j; ++k) {
+        if (kinds[k] < REVOLUTE || kinds[k] > FIXED || a[k] < 0 || a[k] >= c.num_bodies() ||
+            c.motion[a[k]] != DYNAMIC || b[k] < WORLD_BODY || b[k] >= c.num_bodies() ||
+            b[k] == a[k]) {
+            throw nb::value_error(("Batch.set_joints: joint " + std::to_string(k) +
+                                   " has a bad kind or bodies").c_str());
+        }
+    }
+    c.set_joints(std::move(kinds), std::move(a), std::move(b), std::move(pa), std::move(pb),
+                 std::move(ua), std::move(ub), std::move(q));
+}
+
+void bind_joints(Context& cls) {
+    cls.def("set_joints", &set_joints, nb::arg("kind"), nb::arg("body_a"), nb::arg("body_b"),
+            nb::arg("anchor_a"), nb::arg("anchor_b"), nb::arg("axis_a"), nb::arg("axis_b"),
+            nb::arg("reference"),
+            "The scene's joints (src/solver/joints.h): kind (J,) int32, body_a, body_b (J,) "
+            "int32 (-1: the world), anchors (J, 3) m and unit axes (J, 3) in each body's "
+            "frame, reference (J, 4) a's orientation in b's at coordinate 0. Once, before "
+            "stepping; every world's limits open and motors off; the joint stages on.");
+    def_joint_view(cls, "joint_lower", &JointBuffers::lower,
+                   "(B, J) rad or m, each joint's lower limit (-inf: none); writable.");
+    def_joint_view(cls, "joint_upper", &JointBuffers::upper,
+                   "(B, J) rad or m, each joint's upper limit (inf: none); writable.");
+    def_joint_view(cls, "joint_motor_speed", &JointBuffers::motor_speed,
+                   "(B, J) rad/s or m/s, each motor's target speed; writable.");
+    def_joint_view(cls, "joint_max_motor", &JointBuffers::max_motor,
+                   "(B, J) N m or N, each motor's largest torque or force (0: none); writable.");
+    cls.def_prop_ro(
+        "joint_impulse", [](Batch& c) { return joint_vectors(c, c.joints.impulse); },
+        nb::rv_policy::reference,
+        "(B, J, 3) N s, each joint's impulse on its body a over the last step; a copy.");
+    cls.def_prop_ro(
+        "joint_angular_impulse",
+        [](Batch& c) { return joint_vectors(c, c.joints.angular_impulse); },
+        nb::rv_policy::reference,
+        "(B, J, 3) N m s, each joint's angular impulse on its body a about a's centre of "
+        "mass over the last step; a copy.");
+    cls.def_prop_ro(
+        "joint_motor_impulse",
+        [](Batch& c) {
+            const int64_t count = c.num_worlds() * c.joints.size();
+            std::vector<double> values(count);
+            for (int64_t k = 0; k < count; ++k) {
+                values[k] = c.joints.accumulated[3 * k];
+            }
+            return hand_over(std::move(values), {static_cast<size_t>(c.num_worlds()),
+                                                 static_cast<size_t>(c.joints.size())});
+        },
+        nb::rv_policy::reference,
+        "(B, J) N m s or N s, each motor's impulse along its joint's axis over the last "
+        "step's velocity solve; a copy.");
+    cls.def(
+        "joint_coordinates",
+        [](Batch& c) {
+            std::vector<double> values;
+            values.reserve(c.num_worlds() * c.joints.size());
+            for (int w = 0; w < c.num_worlds(); ++w) {
+                const StepContext s = c.world(w);
+                for (int64_t j = 0; j < c.joints.size(); ++j) {
+                    values.push_back(joint_coordinate(s, j));
+                }
+            }
+            return hand_over(std::move(values), {static_cast<size_t>(c.num_worlds()),
+                                                 static_cast<size_t>(c.joints.size())});
+        },
+        "(B, J) each joint's coordinate at the current poses: rad (revolute, in (-pi, pi]), "
+        "m (prismatic), 0 (fixed); a copy.");
 }
 
 }  // namespace
@@ -168,6 +276,7 @@ void bind_world(nb::module_& m) {
     m.attr("STATE") = nb::tuple(state);
     m.attr("MODEL") = nb::tuple(model);
     m.attr("ATTACHMENTS") = nb::tuple(attached);
+    bind_joints(cls);
     cls.def(
         "step",
         [](Batch& c, int64_t steps, double dt) {

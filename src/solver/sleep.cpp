@@ -129,6 +129,15 @@ void find_islands(StepContext& w, int64_t count) {
             rest.island[std::max(ra, rb)] = std::min(ra, rb);
         }
     }
+    const JointRows& joints = w.joints;  // a joint of two dynamic bodies joins them for good
+    for (int64_t j = 0; j < joints.size(); ++j) {
+        const int b = joints.body_b[j];
+        if (b >= 0 && motion[b] == DYNAMIC) {
+            const int64_t ra = root_of(rest.island, joints.body_a[j]);
+            const int64_t rb = root_of(rest.island, b);
+            rest.island[std::max(ra, rb)] = std::min(ra, rb);
+        }
+    }
     for (int i = 0; i < n; ++i) {
         if (motion[i] == DYNAMIC) {
             rest.island[i] = root_of(rest.island, i);
@@ -268,6 +277,15 @@ void mark_asleep(StepContext& w, int64_t count, double dt) {
         const int b = w.lists.pair_b[k];
         const int64_t r = rest.island[w.lists.pair_a[k]];
         if (rest.slow[r] && motion[b] != DYNAMIC && !rest.kept[b] && !same_as_last_start(w, b)) {
+            rest.slow[r] = 0;
+        }
+    }
+    // so is an island jointed to one that changed (a joint held by a moving kinematic body)
+    for (int64_t j = 0; partner_changed && j < w.joints.size(); ++j) {
+        const int b = w.joints.body_b[j];
+        const int64_t r = rest.island[w.joints.body_a[j]];
+        if (b >= 0 && rest.slow[r] && motion[b] != DYNAMIC && !rest.kept[b] &&
+            !same_as_last_start(w, b)) {
             rest.slow[r] = 0;
         }
     }

@@ -1,9 +1,10 @@
 // Sleeping: an island whose last step changed nothing is not stepped again, exactly.
 //
-// The step is a deterministic function of the state. Bodies joined by listed pairs form
-// islands (static and kinematic bodies join nothing: they take no impulse, so the pairs they
-// share carry nothing from one island to another). What the impulse stages do to an island
-// depends only on its own bodies, its pairs and the static or kinematic bodies it touches:
+// The step is a deterministic function of the state. Bodies joined by listed pairs or by
+// joints (joints.h) form islands (static and kinematic bodies join nothing: they take no
+// impulse, so the pairs and joints they share carry nothing from one island to another).
+// What the impulse stages do to an island depends only on its own bodies, its pairs and
+// joints and the static or kinematic bodies it touches:
 // a pair's resolve reads and writes only its two bodies, so pairs of other islands commute
 // with it, and the passes or sweeps that other islands still need find this island as their
 // last one left it and apply nothing. The pairs of an island are listed in the order of

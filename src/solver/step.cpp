@@ -6,6 +6,7 @@
 
 #include "solver/contacts.h"
 #include "solver/integrate.h"
+#include "solver/joints.h"
 #include "solver/overlap.h"
 #include "solver/sleep.h"
 #include "solver/solver.h"
@@ -62,9 +63,17 @@ int64_t list_pairs(StepContext& w, double acceleration, bool carried) {
     const int64_t asleep = *w.rest.previous_awake;
     const Carried known = {{w.rest.kept.data, w.rest.kept.size},
                            {w.rest.previous_keys.data + asleep, *w.rest.previous_count - asleep}};
-    return find_world_pairs(*w.geo, w.model.motion, w.bodies, 0.0, w.dt, acceleration,
-                            w.settings->sweep, w.lists, carried ? known : Carried{});
+    const int64_t count =
+        find_world_pairs(*w.geo, w.model.motion, w.bodies, 0.0, w.dt, acceleration,
+                         w.settings->sweep, w.lists, carried ? known : Carried{});
+    if (w.joints.joined_keys.size == 0 || count > w.pair_capacity()) {
+        return count;
+    }
+    return drop_joined_pairs(w.joints, w.lists, count, w.num_bodies());  // joints.h
 }
+
+// Whether the joint stages run (stages.h: the scene has joints and joint_passes > 0).
+bool joints_on(const StepContext& w) { return (*w.stages)[JOINT_VELOCITY_STAGE]; }
 
 // Copy every body's velocity, angular momentum and angular velocity into w.start (keep), or
 // back from it.
@@ -82,6 +91,13 @@ void keep_velocities(StepContext& w, bool keep) {
             s.angular_velocity[i] = w.start[2 * n + i];
         }
     }
+}
+
+// The bodies kept since the last step (rest.kept, sleep.h), or none without sleeping: their
+// inverse inertia is as when it was computed.
+Span<const uint8_t> kept_bodies(const StepContext& w) {
+    return w.settings->sleep ? Span<const uint8_t>{w.rest.kept.data, w.rest.kept.size}
+                             : Span<const uint8_t>{};
 }
 
 // The bodies asleep in this step (rest.asleep), or none without sleeping.
@@ -149,9 +165,7 @@ Flow check_rest(StepContext& w) {
 Flow prepare(StepContext& w) {
     const bool sleep = w.settings->sleep;
     place_attached(w.bodies, w.attached);
-    refresh_inverse_inertia(w.bodies, w.model,
-                            sleep ? Span<const uint8_t>{w.rest.kept.data, w.rest.kept.size}
-                                  : Span<const uint8_t>{});
+    refresh_inverse_inertia(w.bodies, w.model, kept_bodies(w));
     for (int i = 0; i < w.num_bodies(); ++i) {
         if (!(sleep && w.rest.kept[i])) {
             w.lists.reach[i] = 0.0;
@@ -180,6 +194,11 @@ Flow velocity_update(StepContext& w) {
     return NEXT;
 }
 
+Flow joint_velocity(StepContext& w) {
+    solve_joint_velocities(w, w.dt);
+    return NEXT;
+}
+
 Flow contact(StepContext& w) {
     find_contacts(w, {0.0, 0.0, 0.0});
     resolve_world_contacts(w, *w.rest.awake_pairs, w.dt, CONTACT, w.settings->contact_passes);
@@ -192,7 +211,13 @@ Flow propagate_shock(StepContext& w) {
     return NEXT;
 }
 
-// The collision, velocity update, contact and shock stages over the awake pairs, from the
+Flow joint_position(StepContext& w) {
+    stabilize_joint_positions(w, w.dt);
+    return NEXT;
+}
+
+// The collision, velocity update, joint velocity, contact, shock and joint position stages
+// over the awake pairs (and joints), from the
 // velocities kept in w.start. Where their contacts overflowed the pool, the velocities are
 // put back (the impulse stages change nothing else of the bodies), the world woken (its
 // sleeping bookkeeping has taken this step in: sleep.h; waking changes no bit) and the step
@@ -201,8 +226,10 @@ Flow impulse_stages(StepContext& w) {
     keep_velocities(w, true);
     run(w, COLLISION_STAGE, collide);
     run(w, VELOCITY_STAGE, velocity_update);
+    run(w, JOINT_VELOCITY_STAGE, joint_velocity);
     run(w, CONTACT_STAGE, contact);
     run(w, SHOCK_STAGE, propagate_shock);
+    run(w, JOINT_POSITION_STAGE, joint_position);
     if (!pool_overflowed(w)) {
         return NEXT;
     }
@@ -243,16 +270,28 @@ Flow correct_overlaps(StepContext& w) {
 }
 
 // The position update with the final velocities; forces and torques are spent. The asleep
-// pairs' bodies are asleep or not dynamic: the position update reads no count of theirs.
+// pairs' bodies are asleep or not dynamic: the position update reads no count of theirs. A
+// jointed body counts as acted on (joints.h).
 Flow position_update(StepContext& w) {
     const Settings& c = *w.settings;
     count_acting_pairs_of_bodies(w, *w.rest.awake_pairs);
+    if (joints_on(w)) {
+        count_joints_of_bodies(w);
+    }
     update_positions(w.bodies, w.model, w.dt, c.rotation_order, c.keep_energy,
                      {w.pairs_of.data, w.pairs_of.size}, asleep_bodies(w));
     for (int i = 0; i < w.num_bodies(); ++i) {
         w.bodies.force[i] = {0.0, 0.0, 0.0};
         w.bodies.torque[i] = {0.0, 0.0, 0.0};
     }
+    return NEXT;
+}
+
+// The joints' velocities projected at the new poses, with I^-1 at the new orientations
+// (joints.h): the step ends with velocities the joints allow.
+Flow joint_projection(StepContext& w) {
+    refresh_inverse_inertia(w.bodies, w.model, kept_bodies(w));
+    project_joint_velocities(w, w.dt);
     return NEXT;
 }
 
@@ -284,6 +323,7 @@ int64_t step_world(StepContext& w, int64_t steps, double dt) {
         }
         run(w, OVERLAP_STAGE, correct_overlaps);
         run(w, POSITION_STAGE, position_update);
+        run(w, JOINT_PROJECTION_STAGE, joint_projection);
         run(w, SLEEP_RECORD_STAGE, record_rest);
     }
     place_attached(w.bodies, w.attached);  // held bodies where the last step left their holders

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <utility>
+#include <vector>
 
 #include "solver/sleep.h"
 
@@ -190,6 +191,24 @@ Rest RestBuffers::rows(int w, Span<uint8_t> asleep) {
     return out;
 }
 
+void JointBuffers::allocate(int worlds, int64_t n) {
+    row_bodies = n;
+    const int64_t j = size(), r = MAX_JOINT_ROWS * j;
+    RG_JOINT_WORLD_ROWS(RG_ALLOCATE)
+    RG_JOINT_SOLVE_ROWS(RG_ALLOCATE)
+}
+
+JointRows JointBuffers::view(int w) {
+    const int64_t n = row_bodies, j = size(), r = MAX_JOINT_ROWS * j;
+    JointRows out;
+#define RG_SHARED_VIEW(type, name, count, fill) out.name = {name.data(), name.size()};
+    RG_JOINT_MODEL_ROWS(RG_SHARED_VIEW)
+#undef RG_SHARED_VIEW
+    RG_JOINT_WORLD_ROWS(RG_VIEW)
+    RG_JOINT_SOLVE_ROWS(RG_VIEW)
+    return out;
+}
+
 Batch::Batch(int num_worlds, Geometry geometry, std::vector<int32_t> body_motion,
              Vec3 world_gravity, Settings settings, int64_t pair_contacts)
     : gravity(world_gravity),
@@ -203,7 +222,7 @@ Batch::Batch(int num_worlds, Geometry geometry, std::vector<int32_t> body_motion
     up_ = gravity_length_ > 0.0 ? Vec3{-g.x / gravity_length_, -g.y / gravity_length_,
                                        -g.z / gravity_length_}
                                 : Vec3{0.0, 0.0, 1.0};
-    stages_ = stage_rules(settings_, gravity_length_ > 0.0);
+    stages_ = stage_rules(settings_, gravity_length_ > 0.0, false);
     for (Array<Vec3>* rows : {&position, &velocity, &angular_momentum, &angular_velocity, &force,
                               &torque, &inverse_moments, &attach_offset_position}) {
         rows->assign(b * n, {0.0, 0.0, 0.0});
@@ -234,6 +253,7 @@ Batch::Batch(int num_worlds, Geometry geometry, std::vector<int32_t> body_motion
     stage_calls.assign(b * STAGE_COUNT, 0);
     rest_.allocate_bodies(num_worlds_, n);
     contacts_.allocate_bodies(num_worlds_, n);
+    joints.allocate(num_worlds_, n);  // none until set_joints
     allocate_pairs(std::max<int64_t>(8, 2 * n));
     contacts_.allocate_rows(num_worlds_, 8 * pair_capacity_);
 }
@@ -258,6 +278,83 @@ void Batch::grow_pairs(int64_t needed) {
     if (needed > pair_capacity_) {
         allocate_pairs(2 * needed);
     }
+}
+
+void Batch::set_joints(Array<int32_t> kind, Array<int32_t> body_a, Array<int32_t> body_b,
+                       Array<Vec3> anchor_a, Array<Vec3> anchor_b, Array<Vec3> axis_a,
+                       Array<Vec3> axis_b, Array<Quat> reference) {
+    JointBuffers& m = joints;
+    m.kind = std::move(kind);
+    m.body_a = std::move(body_a);
+    m.body_b = std::move(body_b);
+    m.anchor_a = std::move(anchor_a);
+    m.anchor_b = std::move(anchor_b);
+    m.axis_a = std::move(axis_a);
+    m.axis_b = std::move(axis_b);
+    m.reference = std::move(reference);
+    const int64_t j = m.size();
+    // the broad phase's key of each joined pair: a the body of higher motion class, ties the
+    // lower index (broad_phase.h)
+    std::vector<int64_t> keys;
+    for (int64_t k = 0; k < j; ++k) {
+        int32_t p = m.body_a[k], q = m.body_b[k];
+        if (q < 0) {
+            continue;  // the world frame is no body of the broad phase
+        }
+        if (motion[q] > motion[p] || (motion[q] == motion[p] && q < p)) {
+            std::swap(p, q);
+        }
+        keys.push_back(static_cast<int64_t>(p) * num_bodies_ + q);
+    }
+    std::sort(keys.begin(), keys.end());
+    keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+    m.joined_keys.assign(keys.data(), static_cast<int64_t>(keys.size()));
+    // components: bodies joined through joints (union-find over the dynamic bodies), each
+    // named by its least joint; the joints listed by component, in index order within each
+    std::vector<int64_t> root(num_bodies_);
+    for (int i = 0; i < num_bodies_; ++i) {
+        root[i] = i;
+    }
+    const auto find = [&](int64_t i) {
+        while (root[i] != i) {
+            i = root[i] = root[root[i]];
+        }
+        return i;
+    };
+    for (int64_t k = 0; k < j; ++k) {
+        const int32_t q = m.body_b[k];
+        if (q >= 0 && motion[q] == DYNAMIC) {
+            const int64_t ra = find(m.body_a[k]), rb = find(q);
+            root[std::max(ra, rb)] = std::min(ra, rb);
+        }
+    }
+    std::vector<int64_t> first_joint(num_bodies_, -1);  // per root: its component's least joint
+    for (int64_t k = 0; k < j; ++k) {
+        const int64_t r = find(m.body_a[k]);
+        if (first_joint[r] < 0) {
+            first_joint[r] = k;
+        }
+    }
+    std::vector<int32_t> order;
+    std::vector<int64_t> starts;
+    for (int64_t k = 0; k < j; ++k) {
+        const int64_t r = find(m.body_a[k]);
+        if (first_joint[r] != k) {
+            continue;  // listed with its component's least joint
+        }
+        starts.push_back(static_cast<int64_t>(order.size()));
+        for (int64_t other = k; other < j; ++other) {
+            if (find(m.body_a[other]) == r) {
+                order.push_back(static_cast<int32_t>(other));
+            }
+        }
+    }
+    starts.push_back(static_cast<int64_t>(order.size()));
+    m.order.assign(order.data(), static_cast<int64_t>(order.size()));
+    m.component_start.assign(starts.data(), static_cast<int64_t>(starts.size()));
+    m.allocate(num_worlds_, num_bodies_);
+    stages_ = stage_rules(settings_, gravity_length_ > 0.0, j > 0);
+    forget(0, num_worlds_);
 }
 
 void Batch::forget(int first, int last) {
@@ -309,6 +406,7 @@ StepContext Batch::world(int w) {
     s.wide = wide_.rows(w);
     s.graph = graph_.rows(w);
     s.rest = rest_.rows(w, world_rows(asleep, w, n));
+    s.joints = joints.view(w);
     s.timers.seconds = world_rows(stage_seconds, w, STAGE_COUNT);
     s.timers.calls = world_rows(stage_calls, w, STAGE_COUNT);
     s.timers.timed = timed;

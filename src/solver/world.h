@@ -16,6 +16,7 @@
 #include "collision/broad_phase.h"
 #include "solver/contact_set.h"
 #include "collision/geometry.h"
+#include "solver/joint_rows.h"
 #include "solver/settings.h"
 #include "solver/sharing.h"
 #include "solver/stages.h"
@@ -145,7 +146,7 @@ struct ContactCache {
 struct StepContext {
     const Geometry* geo;
     const Settings* settings;
-    const StageSwitches* stages;  // stage_rules of the settings and the scene's gravity
+    const StageSwitches* stages;  // stage_rules of the settings, the scene's gravity and joints
     double dt = 0.0;              // s, the step's
     double gravity = 0.0;         // |g|, m/s^2
     Vec3 up = {0.0, 0.0, 1.0};    // unit vector against gravity
@@ -163,6 +164,7 @@ struct StepContext {
     ContactSet wide;         // one body's contacts with all its frozen supports
     Graph graph;
     Rest rest;
+    JointRows joints;        // joints.h
     StageTimers timers;      // the world's time per stage, filled by step_world
 
     int num_bodies() const { return static_cast<int>(bodies.position.size); }
@@ -254,6 +256,20 @@ struct RestBuffers {
     Rest rows(int w, Span<uint8_t> asleep);
 };
 
+// The batched buffers behind a JointRows: the model of J joints, shared by the worlds, and B
+// worlds' rows of J joints and of their solve (n bodies).
+struct JointBuffers {
+    RG_JOINT_MODEL_ROWS(RG_ARRAY_FIELD)
+    RG_JOINT_WORLD_ROWS(RG_ARRAY_FIELD)
+    RG_JOINT_SOLVE_ROWS(RG_ARRAY_FIELD)
+    int64_t row_bodies = 0;  // n
+
+    // The per-world rows of the model's joints: every limit open, every motor off.
+    void allocate(int num_worlds, int64_t num_bodies);
+    JointRows view(int w);
+    int64_t size() const { return kind.size(); }
+};
+
 // The batch: every buffer the step reads and writes for B worlds of one scene.
 class Batch {
 public:
@@ -277,6 +293,13 @@ public:
 
     // Let each world's contact pool hold what its last step needed (ContactCacheBuffers).
     void fit_contact_rows();
+
+    // The scene's J joints (joint_rows.h: kinds, bodies, anchors, axes and references),
+    // every world's limits open and motors off (set through `joints`' per-world rows); made
+    // once, before stepping. Switches the joint stages on (stages.h) where J > 0.
+    void set_joints(Array<int32_t> kind, Array<int32_t> body_a, Array<int32_t> body_b,
+                    Array<Vec3> anchor_a, Array<Vec3> anchor_b, Array<Vec3> axis_a,
+                    Array<Vec3> axis_b, Array<Quat> reference);
 
     // No body of worlds [first, last) sleeps in their next step: what changed cannot be seen
     // in their state (masses, materials, attachments, a reset).
@@ -302,6 +325,8 @@ public:
     // Time per stage of every step so far (timers.h), per world: read by World.profile().
     Array<double> stage_seconds;    // (B, STAGE_COUNT) s
     Array<int64_t> stage_calls;     // (B, STAGE_COUNT)
+    // Joints (joint_rows.h): the model, and per world limits, motors, the last step's impulses.
+    JointBuffers joints;
     bool timed = false;             // read the clock in every stage (timers.h)
     BatchSharing sharing;           // step on the calling thread or the pool (sharing.h)
 
