@@ -15,6 +15,7 @@ import numpy as np
 
 from rigid_gym._core import DYNAMIC
 from rigid_gym.checks import in_range, integer
+from rigid_gym.fast_motion import can_move_far
 
 if TYPE_CHECKING:
     from rigid_gym.scene import Scene
@@ -63,6 +64,12 @@ class SolverConfig:
         the excess within the step that made it: overlap the velocity-level phases cannot
         see (the corner of a fast-turning box sweeping into a neighbour and out of it again
         within the step, separating at the predicted pose) is gone before anyone looks.
+    continuous: find the contacts of a pair that moves further in a step than half the
+        thinner body's half thickness at their time of impact rather than at the end of the
+        step (``src/solver/continuous.h``): a fast body stops at a thin wall instead of
+        jumping it, a falling plate lands on a table top instead of sinking through. Pairs
+        that move less are found as before, bit for bit. ``for_scene`` leaves it out where
+        nothing can move that far (``rigid_gym.fast_motion``).
     detect_every_pass: run the narrow phase again at the predicted poses in every pass of
         every impulse phase (the original GBF formulation) instead of finding each pair's
         contacts once per step and carrying their separations through the passes
@@ -80,6 +87,7 @@ class SolverConfig:
     detect_every_pass: bool = False
     keep_energy: bool = True
     overlap_correction: float = 1.0
+    continuous: bool = True
 
     def __post_init__(self):
         for name, low, high in (("collision_passes", 0, 1000), ("contact_passes", 0, 1000),
@@ -100,18 +108,19 @@ class SolverConfig:
                              f"got {self.rotation_order!r}")
         if self.sweep not in (None, True, False):
             raise ValueError(f"SolverConfig.sweep must be None, True or False, got {self.sweep!r}")
-        for name in ("sleep", "detect_every_pass", "keep_energy"):
+        for name in ("sleep", "detect_every_pass", "keep_energy", "continuous"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"SolverConfig.{name} must be True or False, got "
                                  f"{getattr(self, name)!r}")
 
     @classmethod
-    def for_scene(cls, scene: Scene, **overrides) -> SolverConfig:
+    def for_scene(cls, scene: Scene, dt: float | None = None, **overrides) -> SolverConfig:
         """The default configuration with what ``scene`` cannot need switched off (no shock
         propagation without gravity or when nothing can rest on anything: no dynamic body, or
-        one alone in empty space) and no collision phase when every restitution is 0 (impacts
-        are then the contact phase's alone; ``collision_passes``).
-        ``overrides`` (any field) win over both."""
+        one alone in empty space; no continuous collision where nothing can move far in a
+        step of ``dt`` s, or, without ``dt``, nothing can move: ``fast_motion.can_move_far``)
+        and no collision phase when every restitution is 0 (impacts are then the contact
+        phase's alone; ``collision_passes``). ``overrides`` (any field) win over all."""
         known = {f.name for f in fields(cls)}
         unknown = set(overrides) - known
         if unknown:
@@ -124,6 +133,7 @@ class SolverConfig:
         supports = len(scene.bodies) - dynamic
         if not np.any(scene.gravity) or dynamic == 0 or (dynamic == 1 and supports == 0):
             derived["shock_sweeps"] = 0
+        derived["continuous"] = can_move_far(scene, dt)
         return cls(**{**derived, **overrides})
 
     def core_settings(self, gravity: np.ndarray, sweep: bool) -> dict:
@@ -137,6 +147,7 @@ class SolverConfig:
                 "sleep": self.sleep, "sleep_speed": float(self.sleep_speed),
                 "detect_every_pass": self.detect_every_pass,
                 "keep_energy": self.keep_energy, "overlap_correction": self.overlap_correction,
+                "continuous": self.continuous,
                 "gravity": magnitude, "up": tuple(float(u) for u in up)}
 
     def phases(self, gravity: bool = True) -> dict[str, bool]:

@@ -34,6 +34,7 @@ struct Settings {
     bool detect_every_pass = false;  // contacts.h: the narrow phase in every pass
     bool keep_energy = true;   // integrate.h: rotation update put back on the body's energy
     double overlap_correction = 1.0;  // overlap.h: fraction of excess overlap removed per step
+    bool continuous = false;   // continuous.h: pairs that move far in a step found at impact
     double gravity = 0.0;      // |g|, m/s^2
     Vec3 up = {0.0, 0.0, 1.0};  // unit vector against gravity
 };
