@@ -1,8 +1,8 @@
 """Whether anything in a scene can move far enough in one step to need continuous collision.
 
 ``SolverConfig.for_scene`` switches ``continuous`` on where :func:`can_move_far` says so. The
-core sweeps a pair when its relative motion in a step exceeds ``FAST_FRACTION`` of the thinner
-body's half thickness (``src/solver/continuous.h``). What a scene *can* do, left to itself: the
+core sweeps a pair when its relative motion in a step exceeds the thinner body's half
+thickness (``src/solver/continuous.h``). What a scene *can* do, left to itself: the
 energy it starts with bounds every speed, since the step can only remove energy (restitution
 <= 1, inelastic contact passes). That energy is the dynamic bodies' kinetic energy plus the
 potential energy of each falling until its centre is its half thickness above the lowest
@@ -29,11 +29,6 @@ from rigid_gym.shapes import Compound, Plane, Shape
 
 if TYPE_CHECKING:
     from rigid_gym.scene import BodySpec, Scene
-
-FAST_FRACTION = 0.5
-"""A pair moves far in a step when its relative motion exceeds this fraction of the thinner
-body's half thickness (``FAST_FRACTION`` in ``src/solver/continuous.h``)."""
-
 
 def half_thickness(shape) -> float:
     """The shape's least half extent (m), as the core takes it: a box's least half edge, a
@@ -101,10 +96,10 @@ def reachable_speed(scene: Scene) -> float:
 
 def can_move_far(scene: Scene, dt: float | None = None) -> bool:
     """Whether some pair of ``scene`` can move further relative to each other in a step of
-    ``dt`` (s) than FAST_FRACTION of the thinnest body's half thickness, left to the scene's
+    ``dt`` (s) than the thinnest body's half thickness, left to the scene's
     own energy; without ``dt``, whether anything can move at all."""
     speed = reachable_speed(scene)
     if dt is None or speed == 0.0:
         return speed > 0.0
     thinnest = min(half_thickness(b.shape) for b in scene.bodies)
-    return speed * dt > FAST_FRACTION * thinnest
+    return speed * dt > thinnest

@@ -337,7 +337,7 @@ CASES = (
          wall_error, {**PASS_SETTINGS, "continuous off": {"continuous": False}},
          "a cube moves 21 cm a step at dt = 1/240 against 1 cm of wall. Found at the end of "
          "the step alone, contacts miss the wall or meet it past its mid-plane, where the "
-         "nearest way out is forwards (continuous off: through at 7 of 8 phases). Swept "
+         "nearest way out is forwards (continuous off: through at all 8 phases). Swept "
          "(src/solver/continuous.h), each cube's contacts are found where it meets the wall "
          "and carried on to the end of the step; the contact passes stop it where the step "
          "began, up to a step short of the wall (GBF's inelastic contact at predicted poses)."),
@@ -348,7 +348,8 @@ CASES = (
          {**PASS_SETTINGS, "continuous off": {"continuous": False}},
          "the plates arrive at 9.9 m/s, 4.1 cm a step at dt = 1/240. Found at the end of the "
          "step alone, a plate whose centre is predicted past the table's mid-plane is pushed "
-         "out downwards (box-box's least overlap) and falls through (continuous off); swept, "
+         "out downwards (box-box's least overlap) and falls through (continuous off: 2 of the 4 "
+         "at dt = 1/240); swept, "
          "its contacts are found on the top face. The contact passes stop it where the step "
          "began, and it falls the rest of the way under gravity and rests."),
     Case("torque_free", "torque-free body, I = (1, 2, 3) kg m^2, omega0 = (0.3, 0, 1) rad/s, 10 s",

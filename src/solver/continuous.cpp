@@ -67,12 +67,20 @@ int collide_swept(const WorldStep& w, int a, int b, const Pose& pa, const Pose& 
     const double relative = length(sub(ma.shift, mb.shift)) + length(ma.turn) * w.body_reach[a] +
                             length(mb.turn) * w.body_reach[b];
     const double thin = std::min(half_thickness(*w.geo, a), half_thickness(*w.geo, b));
-    if (!(relative > FAST_FRACTION * thin)) {
+    if (!(relative > thin)) {  // no prediction carried past a mid-plane (continuous.h)
         return collide_bodies(*w.geo, a, b, pa, pb, margin, out, start);
     }
+    // apart by gap, the step closes them by at most relative - gap: the prediction's depth
     const Sweep sa = body_sweep(w, a, ma), sb = body_sweep(w, b, mb);
+    const double gap = body_separation(*w.geo, a, b, sweep_pose(sa, 0.0), sweep_pose(sb, 0.0),
+                                       relative);
+    if (gap > 0.0 && relative - gap <= thin) {
+        return collide_bodies(*w.geo, a, b, pa, pb, margin, out, start);
+    }
     const double t = time_of_impact(*w.geo, a, b, sa, sb, SWEEP_TARGET);
-    if (t >= 1.0) {
+    // apart at t, the rest of the step closes them by at most (1 - t) relative: where that
+    // is no deeper than thin, the prediction is trusted without looking at time t
+    if (t >= 1.0 || (t > 0.0 && (1.0 - t) * relative <= thin)) {
         return collide_bodies(*w.geo, a, b, pa, pb, margin, out, start);
     }
     const Pose ta = sweep_pose(sa, t), tb = sweep_pose(sb, t);
@@ -86,17 +94,24 @@ int collide_swept(const WorldStep& w, int a, int b, const Pose& pa, const Pose& 
     const double rest = 1.0 - t;
     const Vec3 relative_shift = sub(ma.shift, mb.shift);
     int kept = 0;
+    double deepest = -margin;
     for (int64_t r = start; r < start + found; ++r) {
         const Vec3 n = out.normal[r], p = out.point[r];
         const double closing = dot(relative_shift, n) + dot(ma.turn, cross(sub(p, ta.x), n)) -
                                dot(mb.turn, cross(sub(p, tb.x), n));
         const double depth = out.depth[r] - rest * closing;
+        deepest = std::max(deepest, depth);
         if (depth > -margin) {
             out.point[start + kept] = p;
             out.normal[start + kept] = n;
             out.depth[start + kept] = depth;
             kept += 1;
         }
+    }
+    if (deepest <= thin) {  // the prediction is not carried past a mid-plane: trust it
+        centre_a = pa.x;
+        centre_b = pb.x;
+        return collide_bodies(*w.geo, a, b, pa, pb, margin, out, start);
     }
     if (kept > 1) {
         deepest_first(out, start, start + kept);

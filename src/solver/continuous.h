@@ -1,44 +1,50 @@
-// Continuous collision: the contacts of a pair that moves far in a step, found at its time of
-// impact rather than at the end of the step.
+// Continuous collision: the contacts of a pair that moves far in a step, found where its
+// bodies meet rather than at the end of the step.
 //
 // The impulse stages judge contacts at the poses predicted for the end of the step
-// (contacts.h). A pair whose bodies move further relative to each other in a step than
-// FAST_FRACTION of the thinner one's half thickness can meet and part again between two
-// predictions (a 2 cm cube at 50 m/s moves 21 cm a step at dt = 1/240 and jumps a 1 cm wall),
-// or end a step with the moving body's centre past the other's mid-plane, where the nearest
-// way out is forwards (box_box.cpp's least overlap: a falling plate then sinks through a table
-// top). For such a pair (Settings::continuous) the bodies are swept from their current poses
-// to the predicted ones (time_of_impact.h); where they come within SWEEP_TARGET of each other
-// at fraction t < 1 of the step, the narrow phase runs at the poses of time t, and each
-// contact's depth is carried on to the end of the step by the rest of the motion, moving the
-// contact rigidly with both bodies as contacts.h carries depths through the passes:
+// (contacts.h). Where a pair's relative motion in a step exceeds the thinner body's half
+// thickness, the prediction can carry one body past the other's mid-plane, or past it
+// altogether: a 2 cm cube at 50 m/s moves 21 cm a step at dt = 1/240 and jumps a 1 cm wall,
+// and a plate falling onto a table top is found with its centre past the top's mid-plane,
+// where the nearest way out is downwards (box_box.cpp's least overlap), and sinks through.
+// For such a pair (Settings::continuous) the bodies are swept from their current poses to
+// the predicted ones (time_of_impact.h). Where they come within SWEEP_TARGET of each other at
+// fraction t < 1 of the step, the narrow phase runs at the poses of time t and each contact's
+// depth is carried on to the end of the step by the rest of the motion, moving the contact
+// rigidly with both bodies as contacts.h carries depths through the passes:
 //
 //     depth = depth_t - (1 - t) [D_a . n + Theta_a . (r_a x n) - D_b . n - Theta_b . (r_b x n)]
 //
 // (D, Theta: each body's predicted displacement and turn; r: the contact's levers from the
 // centres at time t, which are the pair's centres for the passes). The contact stage then
-// sees a contact that overlaps at the predicted poses and stops the approach there, as for
-// any contact; what the start-of-step gap (gap = -(depth + dt v_n), solver.cpp) comes to is
-// the separation at the start of the step, so speculative closing treats it as what it is.
-// A pair that does not meet within the step, or moves less, is found at the predicted poses
-// as before: nothing changes for slow scenes, bit for bit.
+// sees a contact that overlaps at the prediction, with the normal of the face the bodies
+// meet at, and a start-of-step gap (gap = -(depth + dt v_n), solver.cpp) that is the real
+// one. Those contacts are used only where one is carried deeper than the thinner half
+// thickness: short of that the prediction passes no mid-plane, and its own contacts are
+// better (the features that touch at the end of the step, not only those that touched
+// first: a pile's tumbling bodies). A pair that moves less, does not meet within the step or
+// is not carried that deep is found at the predicted poses as before, bit for bit (a
+// falling pile of 1000 steps the same bits with continuous collision on or off).
+//
+// GBF's contact stage stops an approach at e = 0 without closing gaps larger than gravity
+// closes in a step (patch.h, closable), so a body caught this way stops where it began the
+// step, up to a step's travel short of what it meets, and gravity closes the rest over the
+// next steps; with e > 0 the collision stage bounces it from there at its full speed.
 //
 // Thickness: a box's least half extent, a sphere's or capsule's radius, a mesh's least half
 // extent of its bounding box in its body frame (an overestimate for a thin mesh lying
 // diagonally in it); a plane has none (nothing passes a half-space), and a body of several
-// geoms has its thinnest geom's. Box2D v3 calls a body fast above half its least extent,
-// and sweeps it against the static world; here the pair's relative motion is compared with
-// the thinner body, so that a slow box pushed through a thin moving plate is swept too.
+// geoms has its thinnest geom's. Box2D v3 sweeps a body fast against its own least extent, and
+// against the static world only; here the pair's relative motion is compared with the
+// thinner body of the two, so that a slow box pushed at a thin moving plate is swept too.
+// The rest of the step's turn is linearised, so a body turning by radians a step can still
+// be missed. Nothing is allocated; the result is a function of the pair's state alone.
 #pragma once
 
 #include "collision/narrow_phase.h"
 #include "solver/world.h"
 
 namespace rg {
-
-// A pair is swept when its relative motion in a step exceeds this fraction of the thinner
-// body's half thickness.
-constexpr double FAST_FRACTION = 0.5;
 
 // m: the sweep stops this far short of contact, within the speculative margin (contacts.h),
 // so the narrow phase at time t finds the contact.
