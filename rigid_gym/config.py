@@ -64,12 +64,13 @@ class SolverConfig:
         the excess within the step that made it: overlap the velocity-level phases cannot
         see (the corner of a fast-turning box sweeping into a neighbour and out of it again
         within the step, separating at the predicted pose) is gone before anyone looks.
-    continuous: find the contacts of a pair that moves further in a step than half the
-        thinner body's half thickness at their time of impact rather than at the end of the
-        step (``src/solver/continuous.h``): a fast body stops at a thin wall instead of
-        jumping it, a falling plate lands on a table top instead of sinking through. Pairs
-        that move less are found as before, bit for bit. ``for_scene`` leaves it out where
-        nothing can move that far (``rigid_gym.fast_motion``).
+    continuous: where a pair moves further in a step than the thinner body's half thickness
+        and the end-of-step prediction would carry it past a mid-plane, find its contacts
+        where the bodies meet (time of impact) rather than at the end of the step
+        (``src/solver/continuous.h``): a fast body stops at a thin wall instead of jumping
+        it, a falling plate lands on a table top instead of sinking through. Other pairs
+        are found as before, bit for bit. ``for_scene`` leaves it out where nothing can
+        move that far (``rigid_gym.fast_motion``).
     detect_every_pass: run the narrow phase again at the predicted poses in every pass of
         every impulse phase (the original GBF formulation) instead of finding each pair's
         contacts once per step and carrying their separations through the passes
