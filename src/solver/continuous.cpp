@@ -12,7 +12,8 @@ namespace rg {
 
 namespace {
 
-// Body i's half thickness (m; infinite for a plane): its thinnest geom's (continuous.h).
+// Body i's half thickness (m; infinite for a plane, whose pairs are never swept): its
+// thinnest geom's (continuous.h).
 double half_thickness(const Geometry& geo, int i) {
     double least = std::numeric_limits<double>::infinity();
     for (int g = geo.body_geom_start[i]; g < geo.body_geom_start[i + 1]; ++g) {
@@ -61,7 +62,8 @@ int collide_swept(const WorldStep& w, int a, int b, const Pose& pa, const Pose& 
                   int64_t start, Vec3& centre_a, Vec3& centre_b) {
     centre_a = pa.x;
     centre_b = pb.x;
-    if (!w.settings->continuous) {
+    // a half-space's normal never flips and nothing passes it: a plane's pairs as predicted
+    if (!w.settings->continuous || w.geo->body_unbounded[a] || w.geo->body_unbounded[b]) {
         return collide_bodies(*w.geo, a, b, pa, pb, margin, out, start);
     }
     const double relative = length(sub(ma.shift, mb.shift)) + length(ma.turn) * w.body_reach[a] +

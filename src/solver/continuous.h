@@ -33,8 +33,8 @@
 //
 // Thickness: a box's least half extent, a sphere's or capsule's radius, a mesh's least half
 // extent of its bounding box in its body frame (an overestimate for a thin mesh lying
-// diagonally in it); a plane has none (nothing passes a half-space), and a body of several
-// geoms has its thinnest geom's. Box2D v3 sweeps a body fast against its own least extent, and
+// diagonally in it), and a body of several geoms has its thinnest geom's. A plane's pairs are
+// never swept: nothing passes a half-space and its normal never flips. Box2D v3 sweeps a body fast against its own least extent, and
 // against the static world only; here the pair's relative motion is compared with the
 // thinner body of the two, so that a slow box pushed at a thin moving plate is swept too.
 // The rest of the step's turn is linearised, so a body turning by radians a step can still
