@@ -72,7 +72,13 @@ int collide_swept(const WorldStep& w, int a, int b, const Pose& pa, const Pose& 
     if (!(relative > thin)) {  // no prediction carried past a mid-plane (continuous.h)
         return collide_bodies(*w.geo, a, b, pa, pb, margin, out, start);
     }
-    // apart by gap, the step closes them by at most relative - gap: the prediction's depth
+    // apart by gap, the step closes them by at most relative - gap: the prediction's depth.
+    // Their centres' distance less their reaches bounds the gap from below, for nothing
+    const double apart = length(sub(w.bodies.position[a], w.bodies.position[b])) -
+                         w.body_reach[a] - w.body_reach[b];
+    if (apart > 0.0 && relative - apart <= thin) {
+        return collide_bodies(*w.geo, a, b, pa, pb, margin, out, start);
+    }
     const Sweep sa = body_sweep(w, a, ma), sb = body_sweep(w, b, mb);
     const double gap = body_separation(*w.geo, a, b, sweep_pose(sa, 0.0), sweep_pose(sb, 0.0),
                                        relative);
