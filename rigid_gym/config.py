@@ -16,6 +16,7 @@ import numpy as np
 from rigid_gym import _core
 from rigid_gym._core import DYNAMIC
 from rigid_gym.checks import in_range, integer
+from rigid_gym.fast_motion import can_move_far
 
 if TYPE_CHECKING:
     from rigid_gym.scene import Scene
@@ -66,6 +67,13 @@ class SolverConfig:
         the excess within the step that made it: overlap the velocity-level phases cannot
         see (the corner of a fast-turning box sweeping into a neighbour and out of it again
         within the step, separating at the predicted pose) is gone before anyone looks.
+    continuous: where a pair moves further in a step than the thinner body's half thickness
+        and the end-of-step prediction would carry it past a mid-plane, find its contacts
+        where the bodies meet (time of impact) rather than at the end of the step
+        (``src/solver/continuous.h``): a fast body stops at a thin wall instead of jumping
+        it, a falling plate lands on a table top instead of sinking through. Other pairs
+        are found as before, bit for bit. ``for_scene`` leaves it out where nothing can
+        move that far (``rigid_gym.fast_motion``).
     detect_every_pass: run the narrow phase again at the predicted poses in every pass of
         every impulse phase (the original GBF formulation) instead of finding each pair's
         contacts once per step and carrying their separations through the passes
@@ -83,6 +91,7 @@ class SolverConfig:
     detect_every_pass: bool = CORE_DEFAULTS.detect_every_pass
     keep_energy: bool = CORE_DEFAULTS.keep_energy
     overlap_correction: float = CORE_DEFAULTS.overlap_correction
+    continuous: bool = CORE_DEFAULTS.continuous
 
     def __post_init__(self):
         for name, low, high in (("collision_passes", 0, 1000), ("contact_passes", 0, 1000),
@@ -103,18 +112,19 @@ class SolverConfig:
                              f"got {self.rotation_order!r}")
         if self.sweep not in (None, True, False):
             raise ValueError(f"SolverConfig.sweep must be None, True or False, got {self.sweep!r}")
-        for name in ("sleep", "detect_every_pass", "keep_energy"):
+        for name in ("sleep", "detect_every_pass", "keep_energy", "continuous"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"SolverConfig.{name} must be True or False, got "
                                  f"{getattr(self, name)!r}")
 
     @classmethod
-    def for_scene(cls, scene: Scene, **overrides) -> SolverConfig:
+    def for_scene(cls, scene: Scene, dt: float | None = None, **overrides) -> SolverConfig:
         """The default configuration with what ``scene`` cannot need switched off (no shock
         propagation without gravity or when nothing can rest on anything: no dynamic body, or
-        one alone in empty space) and no collision phase when every restitution is 0 (impacts
-        are then the contact phase's alone; ``collision_passes``).
-        ``overrides`` (any field) win over both."""
+        one alone in empty space; no continuous collision where nothing can move far in a
+        step of ``dt`` s, or, without ``dt``, nothing can move: ``fast_motion.can_move_far``)
+        and no collision phase when every restitution is 0 (impacts are then the contact
+        phase's alone; ``collision_passes``). ``overrides`` (any field) win over all."""
         known = {f.name for f in fields(cls)}
         unknown = set(overrides) - known
         if unknown:
@@ -127,6 +137,7 @@ class SolverConfig:
         supports = len(scene.bodies) - dynamic
         if not np.any(scene.gravity) or dynamic == 0 or (dynamic == 1 and supports == 0):
             derived["shock_sweeps"] = 0
+        derived["continuous"] = can_move_far(scene, dt)
         return cls(**{**derived, **overrides})
 
     def settings(self, sweep: bool = False) -> _core.Settings:
@@ -134,7 +145,7 @@ class SolverConfig:
         phase by sort and sweep or not (``sweep`` as ``collision.uses_sweep`` decides it)."""
         s = _core.Settings()
         for name in ("collision_passes", "contact_passes", "shock_sweeps", "rotation_order",
-                     "sleep", "detect_every_pass", "keep_energy"):
+                     "sleep", "detect_every_pass", "keep_energy", "continuous"):
             setattr(s, name, getattr(self, name))
         s.sleep_speed = float(self.sleep_speed)
         s.overlap_correction = float(self.overlap_correction)
