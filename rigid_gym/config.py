@@ -16,6 +16,7 @@ import numpy as np
 from rigid_gym import _core
 from rigid_gym._core import DYNAMIC
 from rigid_gym.checks import in_range, integer
+from rigid_gym.fast_motion import can_move_far
 
 if TYPE_CHECKING:
     from rigid_gym.scene import Scene
@@ -70,6 +71,13 @@ class SolverConfig:
         joint's rows at once: the velocity solve's rounds of holding a motor or limit at its
         bound, and pre-stabilisation's Newton steps (until every joint holds to 1e-12 m or
         rad); 0 switches the joint stages off, where a scene has no joint.
+    continuous: where a pair moves further in a step than the thinner body's half thickness
+        and the end-of-step prediction would carry it past a mid-plane, find its contacts
+        where the bodies meet (time of impact) rather than at the end of the step
+        (``src/solver/continuous.h``): a fast body stops at a thin wall instead of jumping
+        it, a falling plate lands on a table top instead of sinking through. Other pairs
+        are found as before, bit for bit. ``for_scene`` leaves it out where nothing can
+        move that far (``rigid_gym.fast_motion``).
     detect_every_pass: run the narrow phase again at the predicted poses in every pass of
         every impulse phase (the original GBF formulation) instead of finding each pair's
         contacts once per step and carrying their separations through the passes
@@ -88,6 +96,7 @@ class SolverConfig:
     keep_energy: bool = CORE_DEFAULTS.keep_energy
     overlap_correction: float = CORE_DEFAULTS.overlap_correction
     joint_passes: int = CORE_DEFAULTS.joint_passes
+    continuous: bool = CORE_DEFAULTS.continuous
 
     def __post_init__(self):
         for name, low, high in (("collision_passes", 0, 1000), ("contact_passes", 0, 1000),
@@ -109,18 +118,20 @@ class SolverConfig:
                              f"got {self.rotation_order!r}")
         if self.sweep not in (None, True, False):
             raise ValueError(f"SolverConfig.sweep must be None, True or False, got {self.sweep!r}")
-        for name in ("sleep", "detect_every_pass", "keep_energy"):
+        for name in ("sleep", "detect_every_pass", "keep_energy", "continuous"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"SolverConfig.{name} must be True or False, got "
                                  f"{getattr(self, name)!r}")
 
     @classmethod
-    def for_scene(cls, scene: Scene, **overrides) -> SolverConfig:
+    def for_scene(cls, scene: Scene, dt: float | None = None, **overrides) -> SolverConfig:
         """The default configuration with what ``scene`` cannot need switched off (no shock
         propagation without gravity or when nothing can rest on anything: no dynamic body, or
-        one alone in empty space), no collision phase when every restitution is 0 (impacts
-        are then the contact phase's alone; ``collision_passes``) and no joint stages without
-        a joint (``joint_passes`` 0). ``overrides`` (any field) win over all of these."""
+        one alone in empty space; no continuous collision where nothing can move far in a
+        step of ``dt`` s, or, without ``dt``, nothing can move: ``fast_motion.can_move_far``),
+        no collision phase when every restitution is 0 (impacts are then the contact phase's
+        alone; ``collision_passes``) and no joint stages without a joint (``joint_passes``
+        0). ``overrides`` (any field) win over all."""
         known = {f.name for f in fields(cls)}
         unknown = set(overrides) - known
         if unknown:
@@ -135,6 +146,7 @@ class SolverConfig:
             derived["shock_sweeps"] = 0
         if not scene.joints:
             derived["joint_passes"] = 0
+        derived["continuous"] = can_move_far(scene, dt)
         return cls(**{**derived, **overrides})
 
     def settings(self, sweep: bool = False) -> _core.Settings:
@@ -142,7 +154,7 @@ class SolverConfig:
         phase by sort and sweep or not (``sweep`` as ``collision.uses_sweep`` decides it)."""
         s = _core.Settings()
         for name in ("collision_passes", "contact_passes", "shock_sweeps", "rotation_order",
-                     "sleep", "detect_every_pass", "keep_energy", "joint_passes"):
+                     "sleep", "detect_every_pass", "keep_energy", "joint_passes", "continuous"):
             setattr(s, name, getattr(self, name))
         s.sleep_speed = float(self.sleep_speed)
         s.overlap_correction = float(self.overlap_correction)

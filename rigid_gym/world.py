@@ -119,7 +119,7 @@ class World:
         self.batched = num_worlds is not None
         self.num_worlds = 1 if num_worlds is None else integer(num_worlds, "World.num_worlds", 1,
                                                                 other="None")
-        self.config = SolverConfig.for_scene(scene) if config is None else config
+        self.config = SolverConfig.for_scene(scene, dt) if config is None else config
         self._config_from_scene = config is None
         if not isinstance(profile, bool):
             raise ValueError(f"World.profile: must be True or False, got {profile!r}")
@@ -187,9 +187,13 @@ class World:
                 raise ValueError(f"World.load: body {mine.index} ({mine.name!r}) differs in shape "
                                  f"or motion from the world's scene; only poses, velocities and "
                                  "materials may change between worlds")
-        if self._config_from_scene and SolverConfig.for_scene(scene) != self.config:
+        # a world with continuous collision takes any scene; one without refuses a scene that
+        # needs it
+        keep = {"continuous": True} if self.config.continuous else {}
+        needed = SolverConfig.for_scene(scene, self.dt, **keep)
+        if self._config_from_scene and needed != self.config:
             raise ValueError("World.load: the scene needs another SolverConfig.for_scene than "
-                             f"this world's ({SolverConfig.for_scene(scene)} vs {self.config}); "
+                             f"this world's ({needed} vs {self.config}); "
                              "give the World an explicit config to load such scenes")
         if len(scene.joints) != len(self.scene.joints) or not all(
                 np.array_equal(mine, theirs) for mine, theirs in

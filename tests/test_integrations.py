@@ -1,6 +1,7 @@
 """The tasks under the RL tools people use with Gymnasium: its vector modes, RecordVideo and a
 CleanRL-style wrapper stack, torchrl's GymEnv and RL Baselines3 Zoo. A test whose tool is not
-installed is skipped (torchrl, moviepy for RecordVideo, rl_zoo3: the ``zoo`` extra)."""
+installed is skipped (torchrl; rl_zoo3: the ``zoo`` extra); moviepy, which RecordVideo writes
+with, comes with the ``test`` extra."""
 
 import subprocess
 import sys

@@ -118,6 +118,26 @@ def test_a_struck_row_moves_as_one_and_more_passes_carry_more_of_the_strike():
     assert cases.struck_row_errors(world)[0] < 1e-6
 
 
+@pytest.mark.parametrize("dt", [1 / 30, 1 / 240, 1 / 960])
+def test_cubes_fired_at_a_thin_wall_stay_on_their_side_at_every_phase(dt):
+    """50 m/s at a 1 cm wall, 8 starting phases: every cube ends before the wall (up to the
+    0.1 mm overlap slop); found at the end of the step alone, they go through."""
+    case = next(c for c in cases.CASES if c.key == "wall")
+    assert case.measure(rg.World(case.build(), dt=dt))[0] <= 1e-4
+    off = rg.SolverConfig.for_scene(case.build(), continuous=False)
+    assert case.measure(rg.World(case.build(), dt=dt, config=off))[0] > 1.0
+
+
+@pytest.mark.parametrize("dt", [1 / 60, 1 / 240])
+def test_plates_dropped_on_a_table_top_rest_on_it_at_every_height(dt):
+    """2 mm plates from 5 m onto 4 cm table tops at 4 heights: each rests on its table top;
+    found at the end of the step alone, some are pushed through."""
+    case = next(c for c in cases.CASES if c.key == "plate")
+    assert case.measure(rg.World(case.build(), dt=dt))[0] < 1e-6
+    off = rg.SolverConfig.for_scene(case.build(), continuous=False)
+    assert case.measure(rg.World(case.build(), dt=dt, config=off))[0] > 1.0
+
+
 def test_simulate_rejects_a_run_shorter_than_one_step():
     with pytest.raises(ValueError, match="at least one step"):
         stability.simulate(rg.World(scenes.cube_stack(1), dt=1 / 240), 1e-4)

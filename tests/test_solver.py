@@ -280,6 +280,57 @@ def test_for_scene_leaves_out_what_cannot_matter():
     assert rg.SolverConfig.for_scene(floating, shock_sweeps=3).shock_sweeps == 3
 
 
+def test_for_scene_leaves_continuous_collision_out_where_nothing_can_move_far():
+    """The rule (rigid_gym.fast_motion): the scene's own energy bounds every speed."""
+    resting = cube_stack(1)
+    assert not rg.SolverConfig.for_scene(resting).continuous  # nothing to release
+    assert rg.SolverConfig.for_scene(cube_stack(3)).continuous  # the top cubes can fall
+    dropped = scenes.dropped_ball(0.0, height=0.01)  # 1 cm fall: 0.44 m/s
+    assert rg.SolverConfig.for_scene(dropped).continuous  # it can move, dt unknown
+    assert not rg.SolverConfig.for_scene(dropped, dt=1 / 240).continuous
+    assert rg.SolverConfig.for_scene(dropped, dt=0.1).continuous
+    fired = scenes.cubes_at_wall(1, 50.0, 0.0)
+    assert rg.SolverConfig.for_scene(fired, dt=1 / 240).continuous
+    assert not rg.SolverConfig.for_scene(fired, dt=1 / 240, continuous=False).continuous
+    alone = rg.Scene(gravity=(0, 0, 0))
+    alone.add_body(rg.Box((0.01,) * 3), mass=1.0, velocity=(100.0, 0, 0))
+    assert not rg.SolverConfig.for_scene(alone, dt=1 / 240).continuous  # nothing to hit
+    slope = scenes.incline(30.0, 0.5)  # a tilted plane: the fall has no end
+    assert rg.SolverConfig.for_scene(slope, dt=1e-6).continuous
+    assert rg.World(fired).config.continuous  # the World passes its dt
+
+
+def test_continuous_collision_changes_nothing_where_nothing_moves_far():
+    """A settling pyramid struck by a ball at 1 m/s moves less than any body's half
+    thickness a step at dt = 1/240, and a falling pile of 100 is never carried past a
+    mid-plane: with continuous collision on and off each steps bit for bit the same."""
+    for scene, steps in ((pyramid_and_ball(3, 1.0), 240), (scenes.pile(100), 120)):
+        states = []
+        for continuous in (True, False):
+            world = rg.World(scene, config=rg.SolverConfig.for_scene(scene, continuous=continuous))
+            world.step(steps)
+            states.append(np.concatenate([world.position.ravel(), world.orientation.ravel()]))
+        assert np.array_equal(states[0], states[1])
+
+
+@pytest.mark.parametrize("shape", [rg.Sphere(0.01), rg.Capsule(0.01, 0.02), rg.Box((0.01,) * 3)])
+def test_a_fast_body_stops_at_a_thin_wall_whatever_its_shape(shape):
+    """Fired at 50 m/s (21 cm a step) at a 1 cm wall, tumbling: without continuous collision
+    it is found past the wall's mid-plane or beyond it and goes on; swept, it stays before
+    the wall."""
+    ends = {}
+    for continuous in (True, False):
+        scene = rg.Scene(gravity=(0, 0, 0))
+        scene.add_body(rg.Box((scenes.WALL_HALF, 0.5, 0.5)), static=True, friction=0.0)
+        scene.add_body(shape, mass=0.1, friction=0.0, position=(-0.37, 0.0, 0.0),
+                       velocity=(50.0, 0.0, 0.0), angular_velocity=(3.0, 40.0, 7.0))
+        world = rg.World(scene, config=rg.SolverConfig.for_scene(scene, continuous=continuous))
+        world.step(24)
+        ends[continuous] = world.position[1, 0]
+    assert ends[False] > 1.0
+    assert ends[True] < -scenes.WALL_HALF
+
+
 @pytest.mark.parametrize("spin", [(0.0, -1e-20, 0.0), (0.0, -6.018531076210112e-36, 0.0)])
 def test_a_cube_pinched_at_rest_between_the_table_and_a_kinematic_pad_stays_finite(spin):
     """A trained Push agent parked the pad on a resting cube's top; with an angular momentum of

@@ -34,7 +34,7 @@ from rigid_gym._core import DYNAMIC, STATIC
 from rigid_gym.checks import in_range
 
 PEER_CASES = ("free_fall", "bounce_e05", "bounce_e1", "slide", "incline_slide", "incline_stick",
-              "struck_row", "rolling", "torque_free", "stack_drift")
+              "struck_row", "rolling", "wall", "plate", "torque_free", "stack_drift")
 """Keys of the cases of ``rigid_gym.report.cases`` measured on the peers."""
 
 

@@ -79,6 +79,49 @@ def struck_row(count: int, speed: float) -> rg.Scene:
     return scene
 
 
+WALL_HALF = 0.005
+"""Half the thickness of the thin wall, m (a 1 cm wall)."""
+BULLET_HALF = 0.01
+"""Half edge of the cubes fired at the wall, m (2 cm cubes)."""
+
+
+def cubes_at_wall(count: int, speed: float, spread: float, distance: float = 0.3) -> rg.Scene:
+    """No gravity: a static wall 1 cm thick and 1 m square (body 0, its faces at
+    x = +-WALL_HALF) and ``count`` 0.1 kg cubes of half edge BULLET_HALF, frictionless, e = 0,
+    10 cm apart along y, fired along +x at ``speed`` (m/s). Cube k's leading face starts
+    ``distance`` + k ``spread`` / ``count`` (m) before the wall's near face: the cubes meet the
+    wall at ``count`` phases of a step that travels ``spread``."""
+    scene = rg.Scene(gravity=(0.0, 0.0, 0.0))
+    scene.add_body(rg.Box((WALL_HALF, 0.5, 0.5)), static=True, friction=0.0, name="wall")
+    for k in range(count):
+        lead = -WALL_HALF - distance - k * spread / count
+        scene.add_body(rg.Box((BULLET_HALF,) * 3), mass=0.1, friction=0.0,
+                       position=(lead - BULLET_HALF, 0.1 * (k - (count - 1) / 2), 0.0),
+                       velocity=(speed, 0.0, 0.0))
+    return scene
+
+
+TABLE_HALF = (0.15, 0.15, 0.02)
+"""Half extents of a table top, m (4 cm thick)."""
+PLATE_HALF = (0.05, 0.05, 0.001)
+"""Half extents of the dropped plates, m (2 mm thick)."""
+
+
+def plates_on_tables(tops, release: float) -> rg.Scene:
+    """Static table tops (half extents TABLE_HALF) side by side along x, 0.4 m apart, their top
+    faces at heights ``tops`` (m), bodies 0 .. len(tops) - 1; above each a 0.05 kg plate (half
+    extents PLATE_HALF) lying flat, at rest, its bottom face at ``release`` (m), bodies
+    len(tops) ... Every restitution is 0, friction 0.5."""
+    scene = rg.Scene()
+    for k, top in enumerate(tops):
+        scene.add_body(rg.Box(TABLE_HALF), static=True, position=(0.4 * k, 0.0, top - TABLE_HALF[2]),
+                       name=f"table{k}")
+    for k in range(len(tops)):
+        scene.add_body(rg.Box(PLATE_HALF), mass=0.05, position=(0.4 * k, 0.0, release + PLATE_HALF[2]),
+                       name=f"plate{k}")
+    return scene
+
+
 def spinning_body(moments, omega) -> rg.Scene:
     """A torque-free body (no gravity) with principal ``moments`` (3,) kg m^2 spinning at
     ``omega`` (3,) rad/s, body axes = world axes at t = 0."""

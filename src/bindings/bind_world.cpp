@@ -102,7 +102,8 @@ void bind_settings(nb::module_& m) {
         .def_rw("detect_every_pass", &Settings::detect_every_pass)
         .def_rw("keep_energy", &Settings::keep_energy)
         .def_rw("overlap_correction", &Settings::overlap_correction)
-        .def_rw("joint_passes", &Settings::joint_passes);
+        .def_rw("joint_passes", &Settings::joint_passes)
+        .def_rw("continuous", &Settings::continuous);
     nb::list stages;
     for (const char* name : STAGE_NAMES) {
         stages.append(name);

@@ -8,6 +8,7 @@
 // against the reference face's side planes (Sutherland-Hodgman), giving up to 8 points below
 // the reference face; for an edge axis, the closest points of the two edges give one contact.
 // Face axes win near-ties (FACE_PREFERENCE_*), so resting stacks get stable face contacts.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -52,6 +53,25 @@ double box_extent_along(const Mat3& r, Vec3 h, Vec3 u) {
     return h.x * std::fabs(r.m[0][0] * u.x + r.m[1][0] * u.y + r.m[2][0] * u.z) +
            h.y * std::fabs(r.m[0][1] * u.x + r.m[1][1] * u.y + r.m[2][1] * u.z) +
            h.z * std::fabs(r.m[0][2] * u.x + r.m[1][2] * u.y + r.m[2][2] * u.z);
+}
+
+// Separation of the two boxes along unit axis u (> 0: a gap along u), d = a.x - b.x.
+double axis_separation(Vec3 d, const Mat3& ra, Vec3 ha, const Mat3& rb, Vec3 hb, Vec3 u) {
+    return std::fabs(dot(d, u)) - box_extent_along(ra, ha, u) - box_extent_along(rb, hb, u);
+}
+
+// The edge-edge axis of A's edge direction i and B's j (unit), or false where the edges are
+// parallel (that axis is then one of the face axes).
+bool edge_axis(const Mat3& ra, const Mat3& rb, int i, int j, Vec3& u) {
+    u = {ra.m[1][i] * rb.m[2][j] - ra.m[2][i] * rb.m[1][j],
+         ra.m[2][i] * rb.m[0][j] - ra.m[0][i] * rb.m[2][j],
+         ra.m[0][i] * rb.m[1][j] - ra.m[1][i] * rb.m[0][j]};
+    const double len = std::sqrt(u.x * u.x + u.y * u.y + u.z * u.z);
+    if (len < EDGE_PARALLEL) {
+        return false;
+    }
+    u = {u.x / len, u.y / len, u.z / len};
+    return true;
 }
 
 // The part of polygon `in` with n.p <= offset (Sutherland-Hodgman, one plane).
@@ -187,7 +207,7 @@ int collide_boxes(const Pose& a, Vec3 ha, const Pose& b, Vec3 hb, double margin,
     for (int k = 0; k < 6; ++k) {
         const Vec3 u = (k < 3 ? ra : rb).column(k % 3);
         const double dist = dot(d, u);
-        const double sep = std::fabs(dist) - box_extent_along(ra, ha, u) - box_extent_along(rb, hb, u);
+        const double sep = axis_separation(d, ra, ha, rb, hb, u);
         if (sep > margin) {
             return 0;
         }
@@ -203,17 +223,12 @@ int collide_boxes(const Pose& a, Vec3 ha, const Pose& b, Vec3 hb, double margin,
     // edge-edge axes
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
-            Vec3 u = {ra.m[1][i] * rb.m[2][j] - ra.m[2][i] * rb.m[1][j],
-                      ra.m[2][i] * rb.m[0][j] - ra.m[0][i] * rb.m[2][j],
-                      ra.m[0][i] * rb.m[1][j] - ra.m[1][i] * rb.m[0][j]};
-            const double len = std::sqrt(u.x * u.x + u.y * u.y + u.z * u.z);
-            if (len < EDGE_PARALLEL) {
+            Vec3 u;
+            if (!edge_axis(ra, rb, i, j, u)) {
                 continue;
             }
-            u = {u.x / len, u.y / len, u.z / len};
             const double dist = dot(d, u);
-            const double sep =
-                std::fabs(dist) - box_extent_along(ra, ha, u) - box_extent_along(rb, hb, u);
+            const double sep = axis_separation(d, ra, ha, rb, hb, u);
             if (sep > margin) {
                 return 0;
             }
@@ -234,6 +249,23 @@ int collide_boxes(const Pose& a, Vec3 ha, const Pose& b, Vec3 hb, double margin,
         return face_contact(a, ha, b, hb, best_axis, scale(-1.0, best), margin, -1.0, out, index);
     }
     return face_contact(b, hb, a, ha, best_axis - 3, best, margin, 1.0, out, index);
+}
+
+double box_separation(const Pose& a, Vec3 ha, const Pose& b, Vec3 hb) {
+    const Vec3 d = sub(a.x, b.x);
+    double best = -std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 6; ++k) {
+        best = std::max(best, axis_separation(d, a.r, ha, b.r, hb, (k < 3 ? a.r : b.r).column(k % 3)));
+    }
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            Vec3 u;
+            if (edge_axis(a.r, b.r, i, j, u)) {
+                best = std::max(best, axis_separation(d, a.r, ha, b.r, hb, u));
+            }
+        }
+    }
+    return best;
 }
 
 }  // namespace rg

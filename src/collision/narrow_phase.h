@@ -84,6 +84,11 @@ int collide_core_with_field(const Geometry& geo, int gc, const Pose& pc, int gf,
 int collide_boxes(const Pose& a, Vec3 half_a, const Pose& b, Vec3 half_b, double margin,
                   const ContactBuffer& out, int64_t index);
 
+// The largest separation of box A from box B over the 15 separating axes (m; < 0: they
+// overlap, by at least its magnitude along every axis). A gap along any axis is a lower bound
+// on the boxes' distance, so this never exceeds it (time_of_impact.h relies on that).
+double box_separation(const Pose& a, Vec3 half_a, const Pose& b, Vec3 half_b);
+
 // The 8 corners of a box in units of its half extents, in sample order (x slowest), and its
 // 12 edges as corner pairs, in sample order (the surface samples of geometry.py).
 extern const Vec3 BOX_CORNERS[8];

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "solver/continuous.h"
+
 namespace rg {
 
 namespace {
@@ -17,11 +19,7 @@ constexpr double REDETECT_DRIFT = SPECULATIVE_MARGIN - GRAPH_MARGIN;
 double bound(Vec3 v) { return std::fabs(v.x) + std::fabs(v.y) + std::fabs(v.z); }
 
 // Body i's predicted displacement over dt (m) and turn (rad): what predict_pose applies.
-struct Prediction {
-    Vec3 shift, turn;
-};
-
-Prediction predicted_motion(const StepContext& w, int i, double dt, Vec3 lookahead) {
+Travel predicted_motion(const StepContext& w, int i, double dt, Vec3 lookahead) {
     const int32_t motion = w.model.motion[i];
     if (motion == STATIC) {
         return {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
@@ -68,8 +66,10 @@ bool detect_pair(StepContext& w, int64_t k, const Pose& pa, const Pose& pb, doub
     ContactCache& c = w.contacts;
     const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
     const int64_t first = *c.used;
-    const int64_t found = collide_bodies(*w.geo, a, b, pa, pb, SPECULATIVE_MARGIN,
-                                         {c.point, c.normal, c.depth}, first);
+    const Travel ma = predicted_motion(w, a, dt, lookahead), mb = predicted_motion(w, b, dt, lookahead);
+    Vec3 centre_a, centre_b;
+    const int64_t found = collide_swept(w, a, b, pa, pb, ma, mb, SPECULATIVE_MARGIN,
+                                        {c.point, c.normal, c.depth}, first, centre_a, centre_b);
     *c.needed += found;
     if (first + found > c.depth.size) {
         c.first[k] = -1;
@@ -78,16 +78,15 @@ bool detect_pair(StepContext& w, int64_t k, const Pose& pa, const Pose& pb, doub
     *c.used = first + found;
     c.first[k] = first;
     c.count[k] = found;
-    c.centre_a[k] = pa.x;
-    c.centre_b[k] = pb.x;
-    const Prediction ma = predicted_motion(w, a, dt, lookahead), mb = predicted_motion(w, b, dt, lookahead);
+    c.centre_a[k] = centre_a;
+    c.centre_b[k] = centre_b;
     c.shift_a[k] = ma.shift;
     c.turn_a[k] = ma.turn;
     c.shift_b[k] = mb.shift;
     c.turn_b[k] = mb.turn;
     for (int64_t r = first; r < first + found; ++r) {
-        c.arm_a[r] = cross(sub(c.point[r], pa.x), c.normal[r]);
-        c.arm_b[r] = cross(sub(c.point[r], pb.x), c.normal[r]);
+        c.arm_a[r] = cross(sub(c.point[r], centre_a), c.normal[r]);
+        c.arm_b[r] = cross(sub(c.point[r], centre_b), c.normal[r]);
     }
     return true;
 }
@@ -99,7 +98,10 @@ int64_t collide_now(StepContext& w, const Gather& g, double dt, Vec3 lookahead, 
                     int64_t at) {
     const int a = w.lists.pair_a[g.k], b = w.lists.pair_b[g.k];
     const Pose pa = predict_pose(w, a, dt, lookahead), pb = predict_pose(w, b, dt, lookahead);
-    const int64_t found = collide_bodies(*w.geo, a, b, pa, pb, -g.threshold, set.buffer(), at);
+    Vec3 centre_a, centre_b;
+    const int64_t found = collide_swept(w, a, b, pa, pb, predicted_motion(w, a, dt, lookahead),
+                                        predicted_motion(w, b, dt, lookahead), -g.threshold,
+                                        set.buffer(), at, centre_a, centre_b);
     const bool is_a = g.body == a;
     const double sign = is_a ? 1.0 : -1.0;
     for (int64_t i = at; i < std::min(at + found, set.depth.size); ++i) {
@@ -107,8 +109,8 @@ int64_t collide_now(StepContext& w, const Gather& g, double dt, Vec3 lookahead, 
         set.partner[i] = is_a ? b : a;
         set.source[i] = g.k;
         set.orient[i] = sign;
-        set.centre_a[i] = is_a ? pa.x : pb.x;
-        set.centre_b[i] = is_a ? pb.x : pa.x;
+        set.centre_a[i] = is_a ? centre_a : centre_b;
+        set.centre_b[i] = is_a ? centre_b : centre_a;
     }
     return found;
 }
@@ -138,7 +140,7 @@ int64_t gather_pair(StepContext& w, const Gather& g, double dt, Vec3 lookahead,
     if (c.first[g.k] < 0) {
         return collide_now(w, g, dt, lookahead, set, at);
     }
-    Prediction ma = predicted_motion(w, a, dt, lookahead), mb = predicted_motion(w, b, dt, lookahead);
+    const Travel ma = predicted_motion(w, a, dt, lookahead), mb = predicted_motion(w, b, dt, lookahead);
     Vec3 da = sub(ma.shift, c.shift_a[g.k]), ta = sub(ma.turn, c.turn_a[g.k]);
     Vec3 db = sub(mb.shift, c.shift_b[g.k]), tb = sub(mb.turn, c.turn_b[g.k]);
     const double drift = bound(da) + bound(ta) * w.body_reach[a] + bound(db) +

@@ -20,7 +20,9 @@
 // stack above pushed harder), the pair is detected again at the current prediction before the
 // pass uses it, so no contact the narrow phase would find is missed. With
 // Settings::detect_every_pass the narrow phase runs in every pass instead (the original GBF
-// formulation, kept to measure the difference).
+// formulation, kept to measure the difference). A pair whose bodies move far relative to each
+// other in a step is found where they meet instead, its depths carried on to the end of the
+// step (Settings::continuous, continuous.h), wherever the narrow phase runs.
 //
 // The pool of contact rows has a capacity per world that grows between steps to what the
 // world's own last step needed (world.h: not what other worlds of its batch needed). A step

@@ -17,6 +17,7 @@ struct Settings {
     bool keep_energy = true;          // integrate.h: rotation update put back on the body's energy
     double overlap_correction = 1.0;  // overlap.h: fraction of excess overlap removed per step
     int joint_passes = 20;            // joints.h: rounds of each joint solve; 0: joint stages off
+    bool continuous = true;           // continuous.h: pairs that move far in a step found at impact
 };
 
 }  // namespace rg
