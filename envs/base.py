@@ -23,6 +23,7 @@ from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
 from rigid_gym.recordable import Series
+from rigid_gym.snapshots import SavedStates
 
 from .core import ALL, TaskBatch
 from .options import ARGUMENTS_TABLE, Options, checked_actions
@@ -81,6 +82,8 @@ class RigidGymEnv(gym.Env):
         self.viewer: bool | None = None
         """render_mode='human': whether frames go to the rerun viewer (a display was found at
         the first render), None until then."""
+        self.saved: SavedStates[tuple] = SavedStates(name)
+        """The states kept by ``save_state`` by id."""
 
     # -- the Gymnasium API -------------------------------------------------------------------
 
@@ -135,6 +138,30 @@ class RigidGymEnv(gym.Env):
 
     def close(self):
         self.renderer = None
+
+    # -- snapshots (rigid_gym.snapshots) ----------------------------------------------------
+
+    def save_state(self) -> int:
+        """Keep a copy of the env's whole state and return its id (an int), as panda-gym's
+        ``save_state``: the World (every body, the solver's carried-over bookkeeping), the
+        gripper (what it holds), the goal, the generator (so resets and noise draw the same),
+        the time. From ``restore_state(id)`` the env steps on bit for bit as it did from here
+        with the same actions. Wrappers keep their own state: TimeLimit's step count is not
+        the env's (call this on ``env.unwrapped``; ``copy.deepcopy(env)`` copies wrappers
+        too)."""
+        return self.saved.save(self.core.copy(self._np_random, self._np_random_seed))
+
+    def restore_state(self, state_id: int) -> None:
+        """Put the env back to the state saved as ``state_id`` (``save_state``), which stays
+        saved. The env's ``world`` and ``gripper`` are then new objects: read them again
+        through the env."""
+        saved = self.saved.get(state_id, "restore_state")
+        self.core, self._np_random, self._np_random_seed = saved[0].copy(*saved[1:])
+        self.renderer = None
+
+    def remove_state(self, state_id: int) -> None:
+        """Forget the state saved as ``state_id``, freeing its memory."""
+        self.saved.remove(state_id)
 
     # -- what a recorder reads (rigid_gym.recordable) --------------------------------------
 

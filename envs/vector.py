@@ -23,6 +23,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from rigid_gym.checks import integer
+from rigid_gym.snapshots import SavedStates
 
 from . import TASKS
 from .base import RigidGymEnv, task_spaces
@@ -71,6 +72,8 @@ class RigidGymVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.elapsed = np.zeros(self.num_envs, dtype=np.int64)
         self.action_argument = f"{type(self).__name__}.step: actions"  # as errors name it
+        self.saved: SavedStates[tuple] = SavedStates(type(self).__name__)
+        """The states kept by ``save_state`` by id."""
 
     @property
     def world(self):
@@ -114,6 +117,23 @@ class RigidGymVectorEnv(VectorEnv):
     def compute_reward(self, achieved_goal, desired_goal, info=None):
         """The task's reward for goals of shape (..., goal_size) (as the single env's)."""
         return self.core.compute_reward(achieved_goal, desired_goal)
+
+    # -- snapshots (rigid_gym.snapshots) ----------------------------------------------------
+
+    def save_state(self) -> int:
+        """Keep a copy of every copy's state (its world, gripper, goal, generator and step
+        count in the episode) and return its id (an int); as ``RigidGymEnv.save_state``."""
+        return self.saved.save(self.core.copy(self.elapsed))
+
+    def restore_state(self, state_id: int) -> None:
+        """Put every copy back to the state saved as ``state_id``, which stays saved; from
+        there each steps on bit for bit as it did with the same actions."""
+        saved = self.saved.get(state_id, "restore_state")
+        self.core, self.elapsed = saved[0].copy(*saved[1:])
+
+    def remove_state(self, state_id: int) -> None:
+        """Forget the state saved as ``state_id``, freeing its memory."""
+        self.saved.remove(state_id)
 
 
 def every_copy(successes: np.ndarray) -> dict:
