@@ -89,9 +89,9 @@ RECIPE_EPISODES = 200
 
 def make_actor(env: gym.Env, policy: str, seed: int) -> Callable[[dict], np.ndarray]:
     """observation -> action for ``env``: ``policy`` random, scripted or a model .zip, as
-    ``rigid-gym record`` plays it (``rigid_gym.cli.make_policy``; random actions seeded with
-    ``seed``)."""
-    from rigid_gym.cli import make_policy
+    ``rigid-gym record`` plays it (``rigid_gym.agents.policies.make_policy``; random actions
+    seeded with ``seed``)."""
+    from .policies import make_policy
 
     return make_policy(env, policy, None, seed)
 

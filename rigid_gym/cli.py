@@ -124,6 +124,7 @@ def record(env_id: str, policy: str, algo: str | None, episodes: int, seed: int,
     """Record ``episodes`` episodes of ``env_id`` driven by ``policy``; print each file."""
     import gymnasium as gym
 
+    from rigid_gym.agents.policies import make_policy
     from rigid_gym.recording import RecordRerun
 
     env = RecordRerun(gym.make(env_id), out, episode_trigger=lambda k: True,
@@ -150,23 +151,6 @@ def record(env_id: str, policy: str, algo: str | None, episodes: int, seed: int,
 def policy_name(policy: str) -> str:
     """The run-name part of a --policy value: random, scripted or the model file's stem."""
     return Path(policy).stem if policy.endswith(".zip") else policy
-
-
-def make_policy(env, policy: str, algo: str | None, seed: int):
-    """observation -> action for ``env``: random (the action space sampled, seeded with
-    ``seed``), scripted (``rigid_gym.envs.scripted``) or a stable-baselines3 model .zip (its
-    algorithm ``algo``, else its settings file's, else the zip's)."""
-    if policy == "random":
-        env.action_space.seed(seed)
-        return lambda observation: env.action_space.sample()
-    if policy == "scripted":
-        from rigid_gym.envs.scripted import scripted_policy
-
-        return scripted_policy(env)
-    from rigid_gym.agents.evaluate import load_model, run_metadata
-
-    model = load_model(policy, env, algo or run_metadata(policy).get("algo"))
-    return lambda observation: model.predict(observation, deterministic=True)[0]
 
 
 def train(args) -> int:
