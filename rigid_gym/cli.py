@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rigid_gym.checks import allowed
+from rigid_gym.checks import BadFile, allowed
 
 
 def timed_steps(world, steps: int) -> float:
@@ -475,8 +475,11 @@ def main(argv: list[str] | None = None) -> int:
             return dataset(args)
         return record(args.env_id, args.policy, args.algo, args.episodes, args.seed, args.out,
                       args.run, args.contacts)
-    except ValueError as exc:
+    except ValueError as exc:  # an argument: the usage says what is allowed
         parser.error(str(exc))
+    except BadFile as exc:  # the arguments were fine, a file is not: no usage
+        print(f"rigid-gym: error: {exc}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":
