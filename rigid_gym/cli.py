@@ -3,7 +3,7 @@
     rigid-gym demo [--steps N] [--dt S] [--order {1,2,3}]
     rigid-gym record ENV_ID [--policy random|scripted|MODEL.zip] [--algo NAME] [--episodes N]
                      [--seed S] [--out DIR] [--run NAME] [--contacts]
-    rigid-gym replay FILE [FILE ...]
+    rigid-gym replay FILE [FILE ...] [--web]
     rigid-gym train ENV_ID [--algo sac|tqc|ppo|bc_sac] [--learner auto|sbx|sb3] [--steps N]
                     [--seed S] [--n-envs N] [--out DIR] [--eval-freq N] [--eval-episodes N]
                     [--final-episodes N] [--results DIR] [--checkpoint-freq N] [--resume]
@@ -257,9 +257,11 @@ def dataset(args) -> int:
     return 0
 
 
-def replay(files: list[str]) -> int:
+def replay(files: list[str], web: bool = False) -> int:
     """Open ``files`` in the rerun viewer, with the layout (blueprint file) beside each;
-    returns the viewer's exit status."""
+    returns the viewer's exit status. ``web``, or no display (Linux without DISPLAY and
+    WAYLAND_DISPLAY, where the native viewer cannot open a window): rerun's web viewer,
+    served to a browser at the address it prints, until Ctrl-C."""
     missing = [f for f in files if not Path(f).is_file()]
     if missing:
         print(f"rigid-gym replay: no such file: {', '.join(missing)}", file=sys.stderr)
@@ -269,10 +271,27 @@ def replay(files: list[str]) -> int:
         print(f"rigid-gym replay: the rerun viewer was not found next to {sys.executable} or on "
               "PATH; it comes with pip install 'rerun-sdk==0.41.*'", file=sys.stderr)
         return 1
+    from rigid_gym.envs.base import display_available
     from rigid_gym.recording import blueprint_of
 
     layouts = {str(b): None for b in map(blueprint_of, files) if b is not None}  # in order, once
-    return subprocess.call([viewer, *files, *(b for b in layouts if b not in files)])
+    opened = [*files, *(b for b in layouts if b not in files)]
+    if not web and not display_available():
+        print("rigid-gym replay: no display (DISPLAY and WAYLAND_DISPLAY are unset), so no "
+              "window can open: serving the recordings to a browser with rerun's web viewer "
+              "instead (rerun --web-viewer). Open the address it prints below; from another "
+              "machine, forward its two ports first (ssh -L 9090:localhost:9090 -L "
+              "9876:localhost:9876 HOST). Ctrl-C stops it.", file=sys.stderr, flush=True)
+        web = True
+    if web:
+        return subprocess.call([viewer, "--web-viewer", *opened])
+    status = subprocess.call([viewer, *opened])
+    if status != 0:
+        print(f"rigid-gym replay: the rerun viewer exited with status {status}; where it "
+              "could not open a window, rigid-gym replay --web FILE serves the recordings to "
+              "a browser (rerun --web-viewer), and a recording can be read in Python "
+              "(README, \"Reading a recording back\")", file=sys.stderr)
+    return status
 
 
 def find_rerun() -> str | None:
@@ -357,6 +376,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="also record contact points and force arrows")
     p = commands.add_parser("replay", help="open .rrd recordings in the rerun viewer")
     p.add_argument("files", nargs="+", metavar="FILE", help=".rrd file(s)")
+    p.add_argument("--web", action="store_true",
+                   help="serve them to a browser with rerun's web viewer (the default where "
+                        "no display is found) instead of opening a window")
     p = commands.add_parser("train", help="train a stable-baselines3 baseline on an env")
     p.add_argument("env_id", type=env_id, help="e.g. rigid_gym/Push-v0")
     p.add_argument("--algo", choices=("sac", "tqc", "ppo", "bc_sac"), default=None,
@@ -455,7 +477,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "demo":
         return demo(args.steps, args.dt, args.order)
     if args.command == "replay":
-        return replay(args.files)
+        return replay(args.files, args.web)
     if args.command == "report":
         missing = [m for m in ("matplotlib", "scipy") if importlib.util.find_spec(m) is None]
         if missing:

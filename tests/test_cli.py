@@ -1,6 +1,7 @@
 """The rigid-gym command."""
 
 import re
+import sys
 
 import pytest
 from rigid_gym.agents.train import load_hyperparams
@@ -121,6 +122,7 @@ def test_replay_runs_the_viewer_installed_with_this_python(tmp_path, monkeypatch
     fake.write_text(f"#!/bin/sh\necho \"$@\" > {log}\n")
     fake.chmod(0o755)
     monkeypatch.setattr(cli, "find_rerun", lambda: str(fake))
+    monkeypatch.setenv("DISPLAY", ":0")  # a window can open
     episode = tmp_path / "episode.rrd"
     episode.write_bytes(b"")  # not a rerun file: opened alone
     assert main(["replay", str(episode)]) == 0
@@ -132,6 +134,31 @@ def test_replay_runs_the_viewer_installed_with_this_python(tmp_path, monkeypatch
     episodes = [str(folder / f"r-episode-{k}.rrd") for k in range(2)]
     assert main(["replay", *episodes]) == 0
     assert log.read_text().split() == [*episodes, str(folder / "rigid_gym-Throw-v0.rbl")]
+
+
+def test_replay_without_a_display_serves_the_web_viewer(tmp_path, monkeypatch, capsys):
+    """Where no window can open (Linux without DISPLAY and WAYLAND_DISPLAY), replay serves
+    the files with rerun's web viewer and says so; --web asks for it anywhere; a native
+    viewer that fails points to it."""
+    from rigid_gym import cli
+
+    fake, log = tmp_path / "rerun", tmp_path / "args.txt"
+    fake.write_text(f"#!/bin/sh\necho \"$@\" > {log}\n[ \"$1\" = --web-viewer ]\n")
+    fake.chmod(0o755)
+    monkeypatch.setattr(cli, "find_rerun", lambda: str(fake))
+    monkeypatch.setattr(sys, "platform", "linux")
+    episode = tmp_path / "episode.rrd"
+    episode.write_bytes(b"")
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert main(["replay", str(episode)]) == 0
+    assert log.read_text().split() == ["--web-viewer", str(episode)]
+    assert "no display" in capsys.readouterr().err
+    monkeypatch.setenv("DISPLAY", ":0")
+    assert main(["replay", "--web", str(episode)]) == 0
+    assert log.read_text().split() == ["--web-viewer", str(episode)]
+    assert main(["replay", str(episode)]) == 1  # the stand-in fails without --web-viewer
+    assert "rigid-gym replay --web FILE" in capsys.readouterr().err
 
 
 def test_replay_explains_a_missing_file_or_viewer(tmp_path, monkeypatch, capsys):
