@@ -26,9 +26,9 @@ from rigid_gym.checks import integer
 from rigid_gym.snapshots import SavedStates
 
 from . import TASKS
-from .base import RigidGymEnv, task_spaces
+from .base import RigidGymEnv, refuse_options, task_spaces
 from .core import ALL, TaskBatch
-from .options import Options, checked_actions
+from .options import Options, checked_actions, refuse_unknown
 from .push import PushEnv
 from .stack import StackEnv
 from .task import CUBE_HALF
@@ -52,9 +52,12 @@ class RigidGymVectorEnv(VectorEnv):
         name = f"{env_class.__name__} vector env"
         integer(num_envs, f"{name}: num_envs", 1)
         integer(max_episode_steps, f"{name}: max_episode_steps", 1)
-        if kwargs.get("render_mode") is not None:
-            raise ValueError(f"{name}: render_mode must be None (render a single env, or record "
-                             "one with rigid_gym.recording)")
+        refuse_unknown(name, kwargs)
+        rendering = sorted(k for k, v in kwargs.items() if k.startswith("render") and v is not None)
+        if rendering:
+            raise ValueError(f"{name}: {', '.join(rendering)} must be None (a vector env does "
+                             "not render: render a single env, or record one with "
+                             "rigid_gym.recording)")
         randomize = kwargs.get("randomize", False)
         if randomize is True or (isinstance(randomize, dict) and "size" in randomize):
             raise ValueError(f"{name}: the copies share one geometry, so randomize cannot include "
@@ -83,7 +86,8 @@ class RigidGymVectorEnv(VectorEnv):
     def reset(self, *, seed: int | list | None = None, options: dict | None = None):
         """Reset every copy; ``seed``: None, an int (copy i gets seed + i) or one per copy. A
         copy given no seed goes on with its generator (a random one at its first reset), as
-        ``gym.Env.reset`` does."""
+        ``gym.Env.reset`` does. ``options``: None or {} (``RigidGymEnv.reset``)."""
+        refuse_options(f"{type(self).__name__}.reset", options)
         if seed is None or isinstance(seed, (int, np.integer)):
             seeds = [None if seed is None else int(seed) + i for i in range(self.num_envs)]
         else:
