@@ -347,15 +347,25 @@ def bounded(kind, low, high):
     return parse
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="rigid-gym", description=__doc__.split("\n")[0])
-    commands = parser.add_subparsers(dest="command", required=True)
+def build_parser() -> argparse.ArgumentParser:
+    """The ``rigid-gym`` command line: a subcommand per job, help on every flag."""
+    import rigid_gym
+
+    parser = argparse.ArgumentParser(
+        prog="rigid-gym", description="Robot-manipulation RL tasks (Gymnasium) on an "
+        "impulse-based rigid-body solver: run the solver's demo, record and replay episodes, "
+        "train and evaluate baselines, write offline datasets, regenerate the report. "
+        "`rigid-gym COMMAND --help` tells more.")
+    parser.add_argument("--version", action="version",
+                        version=f"rigid-gym {rigid_gym.__version__}")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     p = commands.add_parser("demo", help="run a few scenes and compare them with closed forms")
     p.add_argument("--steps", type=bounded(int, 2, 10**7), default=2400,
                    help="number of steps, 2 to 1e7 (default 2400)")
     p.add_argument("--dt", type=bounded(float, 1e-6, 0.1), default=1 / 240,
                    help="time step, s, 1e-6 to 0.1 (default 1/240)")
-    p.add_argument("--order", type=int, default=2, choices=(1, 2, 3), help="rotation order")
+    p.add_argument("--order", type=int, default=2, choices=(1, 2, 3),
+                   help="order of the rotation update, 1 to 3 (default 2)")
     p = commands.add_parser("record", help="record episodes of an env to .rrd files")
     p.add_argument("env_id", type=env_id, help="e.g. rigid_gym/Push-v0")
     p.add_argument("--policy", type=policy_spec, default="scripted",
@@ -389,13 +399,16 @@ def main(argv: list[str] | None = None) -> int:
                         "installed (ppo trains on sb3)")
     p.add_argument("--steps", type=bounded(int, 1, 10**9), default=None,
                    help="env steps, 1 to 1e9 (default: hyperparams.yml)")
-    p.add_argument("--seed", type=bounded(int, 0, 2**32 - 1), default=0)
+    p.add_argument("--seed", type=bounded(int, 0, 2**32 - 1), default=0,
+                   help="training seed, 0 to 2^32-1 (default 0): the run's folder and every "
+                        "generator derive from it")
     p.add_argument("--n-envs", type=bounded(int, 1, 1024), default=None,
                    help="envs stepped together, 1 to 1024 (default: hyperparams.yml)")
     p.add_argument("--out", default="runs", help="runs folder (default runs)")
     p.add_argument("--eval-freq", type=bounded(int, 0, 10**9), default=None,
                    help="env steps between evaluations (0: none; default: 20 over the run)")
-    p.add_argument("--eval-episodes", type=bounded(int, 1, 10**4), default=20)
+    p.add_argument("--eval-episodes", type=bounded(int, 1, 10**4), default=20,
+                   help="episodes of each evaluation during training, 1 to 1e4 (default 20)")
     p.add_argument("--final-episodes", type=bounded(int, 0, 10**5), default=100,
                    help="episodes of the final evaluation, written to the run's result.json "
                         "(0: none; default 100)")
@@ -430,7 +443,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--name", default=None, help="experiment name (default sweep-<date-time>)")
     p.add_argument("--eval-freq", type=bounded(int, 1, 10**9), default=10_000,
                    help="env steps between evaluations and checkpoints (default 10000)")
-    p.add_argument("--eval-episodes", type=bounded(int, 1, 10**4), default=20)
+    p.add_argument("--eval-episodes", type=bounded(int, 1, 10**4), default=20,
+                   help="episodes of each evaluation, 1 to 1e4 (default 20)")
     p.add_argument("--cpus-per-trial", type=bounded(float, 0.01, 1024), default=1.0,
                    help="CPUs Ray reserves per trial (default 1)")
     p.add_argument("--max-failures", type=bounded(int, 0, 100), default=0,
@@ -444,7 +458,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--env", type=env_id, default=None,
                    help="env id (default: from the model's settings: run.json in its folder, "
                         "or NAME.json beside NAME.zip)")
-    p.add_argument("--episodes", type=bounded(int, 1, 10**5), default=100)
+    p.add_argument("--episodes", type=bounded(int, 1, 10**5), default=100,
+                   help="seeded evaluation episodes, 1 to 1e5 (default 100)")
     p.add_argument("--record", metavar="DIR", default=None,
                    help="also record up to 3 episodes to DIR")
     p = commands.add_parser("report", help="regenerate the accuracy and stability report")
@@ -473,6 +488,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--recipes", action="store_true",
                    help="regenerate the shipped datasets rigid_gym/{push,stack,throw}/"
                         "{expert,noisy,random}-v0, replacing them")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
     args = parser.parse_args(argv)
     if args.command == "demo":
         return demo(args.steps, args.dt, args.order)

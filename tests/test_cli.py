@@ -95,7 +95,6 @@ def test_record_a_stable_baselines3_model_reads_its_algorithm_from_the_zip(algor
     (["record", "rigid_gym/Push-v0", "--policy", "greedy"],
      "expected random, scripted or a model .zip, got 'greedy'"),
     (["record", "rigid_gym/Push-v0", "--episodes", "0"], "must be in [1, 10000], got 0"),
-    (["record", "rigid_gym/Push-v0", "--policy", "missing.zip"], "no model file at missing.zip"),
     (["record", "rigid_gym/Push-v0", "--run", "a/b"], "RecordRerun.run: must be a non-empty"),
 ])
 def test_bad_record_arguments_fail_clearly(args, message, usage_error):
@@ -240,7 +239,47 @@ def test_a_new_run_in_a_used_folder_chooses_only_among_its_own_checkpoints(tmp_p
     (["sweep", "rigid_gym/Push-v0", "--seeds", "0", "--param", "tau"], "--param must be KEY="),
     (["train", "rigid_gym/Push-v0", "--algo", "dqn"], "invalid choice: 'dqn'"),
     (["train", "rigid_gym/Push-v0", "--steps", "0"], "must be in [1, 1000000000], got 0"),
-    (["evaluate", "missing.zip", "--env", "rigid_gym/Push-v0"], "no model file at missing.zip"),
 ])
 def test_bad_train_and_evaluate_arguments_fail_clearly(args, message, usage_error):
     assert message in usage_error(args)
+
+
+def test_a_missing_or_corrupt_model_is_named_without_usage(tmp_path, capsys):
+    """A file that is not there, or not a model zip: exit 1 with the file named, no usage
+    banner (the arguments were fine) and no traceback."""
+    corrupt = tmp_path / "corrupt.zip"
+    corrupt.write_bytes(b"PK\x03\x04 not really a zip")
+    (tmp_path / "corrupt.json").write_text('{"env_id": "rigid_gym/Push-v0"}')
+    cases = [(["evaluate", "nope.zip"], "model file nope.zip not found"),
+             (["evaluate", "nope.zip", "--env", "rigid_gym/Push-v0"],
+              "model file nope.zip not found"),
+             (["record", "rigid_gym/Push-v0", "--policy", "nope.zip", "--out", str(tmp_path)],
+              "model file nope.zip not found"),
+             (["evaluate", str(corrupt)], f"{corrupt} is not a stable-baselines3 model zip")]
+    for args, message in cases:
+        assert main(args) == 1
+        err = capsys.readouterr().err
+        assert message in err and "usage" not in err and "Traceback" not in err, err
+        assert "pass the algorithm" not in err
+
+
+def test_version_and_help_on_every_flag(capsys):
+    """--version prints the package's version; every flag of every command has help; no
+    help shows reStructuredText markup."""
+    import argparse
+
+    import rigid_gym
+    from rigid_gym.cli import build_parser
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--version"])
+    assert exit_info.value.code == 0
+    assert capsys.readouterr().out.strip() == f"rigid-gym {rigid_gym.__version__}"
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    texts = [parser.format_help()]
+    for name, command in commands.choices.items():
+        texts.append(command.format_help())
+        for action in command._actions:
+            assert action.help, f"rigid-gym {name} {action.option_strings or action.dest}"
+    assert not any("``" in text for text in texts)
