@@ -11,7 +11,8 @@ that owns every buffer the step uses); ``World.state`` and ``World.model`` are n
 them. ``World.model`` and the arrays returned by properties are read-only views: change them
 with the setters (``set_material`` for masses and materials), which validate their input
 before anything reaches the core and wake the bodies they change (a sleeping body's step is
-skipped on the grounds that nothing about it changed).
+skipped on the grounds that nothing about it changed). ``save_state``/``restore_state``,
+``copy.deepcopy`` and ``pickle`` snapshot a World (``rigid_gym.snapshots``).
 """
 
 from __future__ import annotations
