@@ -5,8 +5,9 @@ Two learners run the same algorithms behind stable-baselines3's interfaces (``le
 callbacks, VecEnv, ``HerReplayBuffer``, ``.zip`` models):
 
 - ``sbx``: SBX (``sbx-rl``, the SB3 maintainers' JAX port, the ``fast`` extra): the off-policy
-  update is one jitted call per vector step (all its gradient steps in a ``fori_loop``), 2-4
-  times the env steps per second of PyTorch's on one core (docs/architecture.md).
+  update is one jitted call per vector step (all its gradient steps in a ``fori_loop``),
+  faster than PyTorch's on one core once several envs share a vector step
+  (``benchmarks/learner.py`` times the settings).
 - ``sb3``: stable-baselines3 on PyTorch, what the ``train`` extra installs.
 
 ``default_learner()`` is sbx where it imports, else sb3. PPO trains on SB3 either way: its

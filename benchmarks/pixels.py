@@ -150,6 +150,48 @@ def save_frames(folder: Path) -> None:
         print(f"wrote {path}")
 
 
+def print_speed_tables(repeats: int, steps: int = 1000, env_steps: int = 1280,
+                       panda_steps: int = 30) -> None:
+    """Print the env steps/s table (single envs, batches, PandaPush-v3) and the CPU time per
+    frame: sections 1-4 above. ``steps``: steps of each single env per round; ``env_steps``:
+    env steps of each vector env per round; ``panda_steps``: steps of PandaPush-v3 per round.
+    ``benchmarks/speed.py`` prints these too, into docs/benchmarks.md."""
+    runs = {}
+    for env_id in TASKS:
+        runs[("pixels", env_id, 1)] = single_stepper(
+            lambda env_id=env_id: gym.make(env_id, obs_mode="pixels", width=SIZE, height=SIZE),
+            steps)
+    runs[("state", TASKS[0], 1)] = single_stepper(lambda: gym.make(TASKS[0]), steps)
+    for b in BATCH_SIZES:
+        for env_id in TASKS:
+            runs[("pixels", env_id, b)] = vector_stepper(env_id, b, max(env_steps // b, 1))
+    panda = panda_maker()
+    if panda is not None:
+        runs[PANDA_PUSH] = single_stepper(panda, panda_steps, render=True)
+    rates = ENVS.rates_in_rounds(runs, repeats)
+    panda_rates = rates.pop(PANDA_PUSH, None)
+
+    print(f"\nEnv steps/s with an {SIZE} x {SIZE} frame per step, random actions, resets "
+          f"included (median of {repeats} rounds, every env timed in turn in each "
+          "round)\n")
+    print(f"| env | obs_mode | envs | env steps/s | ours/{PANDA_PUSH} |")
+    print("|---|---|---|---|---|")
+    for (mode, env_id, b), values in rates.items():
+        rate, ratio = ENVS.rate_and_ratio(values, panda_rates)
+        how = "gym.make" if b == 1 else f"make_vec, B = {b}"
+        print(f"| {env_id} | {mode} | {how} | {rate:,.0f} | {ratio} |")
+    if panda_rates:
+        print(f"| {PANDA_PUSH} (panda-gym, PyBullet), render() {SIZE} x {SIZE} | | gym.make | "
+              f"{statistics.median(panda_rates):,.1f} | 1.00x |")
+
+    print(f"\nCPU time of one {SIZE} x {SIZE} frame (median of {repeats} timings of "
+          "1,000 frames)\n")
+    print("| env | us per frame |")
+    print("|---|---|")
+    for env_id in TASKS:
+        print(f"| {env_id} | {frame_cpu_microseconds(env_id, repeats):.0f} |", flush=True)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
@@ -165,42 +207,8 @@ def main():
         save_frames(args.frames)
     if args.repeats < 1:
         return
-
     print(SPEED.machine_line())
-    runs = {}
-    for env_id in TASKS:
-        runs[("pixels", env_id, 1)] = single_stepper(
-            lambda env_id=env_id: gym.make(env_id, obs_mode="pixels", width=SIZE, height=SIZE),
-            args.steps)
-    runs[("state", TASKS[0], 1)] = single_stepper(lambda: gym.make(TASKS[0]), args.steps)
-    for b in BATCH_SIZES:
-        for env_id in TASKS:
-            runs[("pixels", env_id, b)] = vector_stepper(env_id, b, max(args.env_steps // b, 1))
-    panda = panda_maker()
-    if panda is not None:
-        runs[PANDA_PUSH] = single_stepper(panda, args.panda_steps, render=True)
-    rates = ENVS.rates_in_rounds(runs, args.repeats)
-    panda_rates = rates.pop(PANDA_PUSH, None)
-
-    print(f"\nEnv steps/s with an {SIZE} x {SIZE} frame per step, random actions, resets "
-          f"included (median of {args.repeats} rounds, every env timed in turn in each "
-          "round)\n")
-    print(f"| env | obs_mode | envs | env steps/s | ours/{PANDA_PUSH} |")
-    print("|---|---|---|---|---|")
-    for (mode, env_id, b), values in rates.items():
-        rate, ratio = ENVS.rate_and_ratio(values, panda_rates)
-        how = "gym.make" if b == 1 else f"make_vec, B = {b}"
-        print(f"| {env_id} | {mode} | {how} | {rate:,.0f} | {ratio} |")
-    if panda_rates:
-        print(f"| {PANDA_PUSH} (panda-gym, PyBullet), render() {SIZE} x {SIZE} | | gym.make | "
-              f"{statistics.median(panda_rates):,.1f} | 1.00x |")
-
-    print(f"\nCPU time of one {SIZE} x {SIZE} frame (median of {args.repeats} timings of "
-          "1,000 frames)\n")
-    print("| env | us per frame |")
-    print("|---|---|")
-    for env_id in TASKS:
-        print(f"| {env_id} | {frame_cpu_microseconds(env_id, args.repeats):.0f} |")
+    print_speed_tables(args.repeats, args.steps, args.env_steps, args.panda_steps)
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Speed against the bar of the speed issue: solver steps/s, env steps/s, batched env steps/s.
+"""Speed: solver steps/s, env steps/s, batched env steps/s, pixel env steps/s.
 
 1. Solver (``--only solver``): steps/s at dt = 1/240, one world, for the scenes of
    ``rigid_gym.report.scenes``: settled, the 10-cube stack, the 55-box pyramid (alone, and
@@ -27,15 +27,19 @@
    resets in it); then Push under its scripted policy, the policy's time left out (it
    pushes the cube most of the time, which random actions rarely touch); "not available"
    where a task registers no vector entry point.
+4. Pixels (``--only pixels``): benchmarks/pixels.py's tables: Push, Stack and Throw with an
+   84 x 84 frame per step through ``gym.make`` and ``gym.make_vec`` (B = 16 and 64), Push in
+   state mode and panda-gym's PandaPush-v3 rendering 84 x 84 after every step beside them,
+   and the CPU time of one frame.
 
 The header line names the machine and the versions. One world runs on the calling thread
 only; a batch runs there too or is shared out over the core's threads
 (``rigid_gym._core.num_threads``, at most ``RIGID_GYM_NUM_THREADS``), whichever its own
 timings found faster (src/solver/sharing.h).
 
-    python benchmarks/speed.py                   # all three sections, about 4 minutes on 2 cores
-                                                 # (half of it MuJoCo's 1000-body pile)
-    python benchmarks/speed.py --only solver     # one section: solver, envs or batched
+    python benchmarks/speed.py                   # all four sections, minutes on 2 cores
+                                                 # (MuJoCo's 1000-body pile the longest part)
+    python benchmarks/speed.py --only solver     # one section: solver, envs, batched, pixels
     python benchmarks/speed.py --quick           # smoke run with small counts, about 15 s
     python benchmarks/speed.py --repeats 9       # more timings per median (default 5)
     python benchmarks/speed.py --sleep-speed 0.05  # the threshold of ours, sleeping
@@ -184,8 +188,8 @@ def rate_text(rate: float) -> str:
 WARM_SHARE = 24
 """A settled scene's timing of ``steps`` follows ``steps // WARM_SHARE`` (at least 1) untimed
 ones: each engine's turn comes after the others' (MuJoCo's 1000-body pile fills the caches
-with its own data), and a sleeping stack's step costs ~2 us, so a cold start would weigh as
-much as its 240 timed steps."""
+with its own data), and a sleeping stack's step is so cheap that a cold start would weigh as
+much as its timed steps."""
 
 
 def stepping_rate(world, steps: int, from_start: bool = False) -> float:
@@ -376,9 +380,25 @@ def batched_section(quick: bool, repeats: int) -> None:
         print(f"| {label} | " + " | ".join(cells) + " |", flush=True)
 
 
+# -- pixel observations ----------------------------------------------------------------------
+
+def pixels_section(quick: bool, repeats: int) -> None:
+    """benchmarks/pixels.py's tables: 84 x 84 pixel envs, single and batched, beside
+    PandaPush-v3 rendering a frame per step, and the CPU time of a frame. Loaded here, not at
+    import: pixels.py loads this module for its machine line."""
+    spec = importlib.util.spec_from_file_location("benchmark_pixels",
+                                                  Path(__file__).with_name("pixels.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    if quick:
+        module.print_speed_tables(repeats, steps=100, env_steps=128, panda_steps=5)
+    else:
+        module.print_speed_tables(repeats)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--only", choices=["solver", "envs", "batched"])
+    parser.add_argument("--only", choices=["solver", "envs", "batched", "pixels"])
     parser.add_argument("--quick", action="store_true", help="small counts: a smoke run")
     parser.add_argument("--repeats", type=int, default=5, help="timings per median")
     parser.add_argument("--sleep-speed", type=float, default=SLEEP_SPEED,
@@ -396,7 +416,8 @@ def main() -> None:
     try:
         print(machine_line(), flush=True)
         sections = {"solver": functools.partial(solver_section, sleep_speed=args.sleep_speed),
-                    "envs": envs_section, "batched": batched_section}
+                    "envs": envs_section, "batched": batched_section,
+                    "pixels": pixels_section}
         for name, section in sections.items():
             if args.only in (None, name):
                 section(args.quick, args.repeats)

@@ -125,7 +125,7 @@ class TaskBatch:
                                            name="gripper")
         self.fixtures = self.task.add_fixtures(scene)
         self.scene = scene
-        # compiles the scene's geometry: ~4 ms
+        # compiles the scene's geometry, which later resets reuse
         self.world = World(scene, dt=STEP_TIME / SOLVER_STEPS,
                            num_worlds=self.num_worlds if self.batched else None,
                            config=SolverConfig.for_scene(scene, **SOLVER_SETTINGS))

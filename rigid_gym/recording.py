@@ -48,12 +48,12 @@ Timelines: ``step`` (sequence: env steps, 0 = the state after ``reset``; for a W
 every step from 0; the scalar series at steps 1, 2, ... (the step they led to).
 Rerun stores translations and quaternions as float32 and scalars as float64.
 
-**Cost.** Making a rerun file costs ~2 ms of CPU however short the episode (a quarter of a
-50-step episode of the fastest task), so the recorders only buffer rows in numpy (~3 us per
-step) and hand each file's rows to a writer process (``rigid_gym.recording_writer``, one per
-recording process, started at its first file), which does all the rerun work at a lower
-priority while the env goes on: ~0.35 ms per file in the env's process, the rest on another
-core when there is one (``benchmarks/recording.py``). Rows are handed over at the end of an
+**Cost.** Making a rerun file has a fixed CPU cost however short the episode, a large share of a
+short episode of the fastest task, so the recorders only buffer rows in numpy and hand each
+file's rows to a writer process (``rigid_gym.recording_writer``, one per recording process,
+started at its first file), which does all the rerun work at a lower priority while the env goes
+on: the env's process pays the buffering and the hand-over, the rest runs on another core when
+there is one (``benchmarks/recording.py`` measures both). Rows are handed over at the end of an
 episode, or every ``chunk_steps`` steps, bounding the env process's memory; the writer holds a
 file's rows (~30 bytes per moving body and step) until the file ends.
 
@@ -334,9 +334,8 @@ def _open(path: Path, recording_id: str, world, index: int, options: _Options, l
     (``RERUN=off``, ``0`` or ``false``, which rerun documents). ``layout``: a function of the
     writer that gives the key of the scene's layout there; ``scalars``: the values an env
     step records (its series' labels; 0: none); ``first``: the recorder's first file, whose
-    folder is made here, so that
-    a bad folder fails here (a stat costs ~20 us between env steps; for later files the writer
-    makes the folder again if it has gone)."""
+    folder is made here, so that a bad folder fails here (for later files the writer, not the
+    env's process, makes the folder again if it has gone)."""
     if os.environ.get("RERUN", "").strip().lower() in ("0", "off", "false"):
         return None
     if first:
@@ -348,15 +347,14 @@ def _open(path: Path, recording_id: str, world, index: int, options: _Options, l
 class _Recording:
     """One file of one world of ``world`` (index ``index``): opened in the writer on
     creation; ``record`` buffers rows, which ``flush`` hands to the writer; ``close``
-    completes the file. Small values go to the writer as plain tuples, rows as the bytes of
-    one array (``_Rows``; the writer keeps the moving bodies' columns): pickling a numpy
-    array costs ~7 us however small it is, ~25 us between env steps, its bytes a quarter of
-    that. ``scalars``: the values an env step records, which its rows also hold (0: a
-    World's rows hold none)."""
+    completes the file. Small values go to the writer as plain tuples, rows as the bytes of one
+    array (``_Rows``; the writer keeps the moving bodies' columns): pickling a numpy array has a
+    fixed cost however small it is, several times that of its bytes. ``scalars``: the values an
+    env step records, which its rows also hold (0: a World's rows hold none)."""
 
     def __init__(self, files: Writer, path: Path, recording_id: str, layout: int, world,
                  index: int, options: _Options, scalars: int = 0):
-        self.files, self.path = files, str(path)  # a str pickles ~5x faster than a Path
+        self.files, self.path = files, str(path)  # a str pickles faster than a Path
         self.world, self.index, self.options = world, index, options
         bodies = world.scene.bodies
         statics = {b.index: (tuple(world.state.position[index, b.index].tolist()),
@@ -408,7 +406,7 @@ class _Recording:
     def _send_rows(self) -> None:
         if len(self.rows):
             rows = self.rows.take()
-            self.send("rows", rows.tobytes(), rows.shape[1])  # bytes pickle ~4x faster
+            self.send("rows", rows.tobytes(), rows.shape[1])  # bytes pickle faster than an array
         if self.contacts:
             steps, times, points, origins, vectors = zip(*self.contacts)
             self.contacts = []

@@ -1,16 +1,15 @@
 """The process that writes the rerun files of ``rigid_gym.recording``, and its client.
 
 Each file is one ``ChunkStore`` of rerun chunks, written in one go when the file is closed
-(``rerun.chunk.ChunkStore.write_rrd``). A 50-step episode's file costs the writer ~1.8 ms of
-CPU this way, against ~5 ms through a ``RecordingStream``, whose file sink and batcher start
-and join threads for every file; the chunks the scene's files share are built once. Its
-layout (blueprint) is a file beside it, ``<application id>.rbl`` in the same folder, written
-once: a rerun file holds one store, and a blueprint is a store of its own, which rerun binds
-to recordings by their application id (``rigid-gym replay FILE`` opens both; so does
-``rerun FOLDER/*``). The recorders only buffer an episode's rows in numpy and hand them to a
-writer process, which does all the rerun work while the env goes on: one writer per recording
-process, started at its first file (``writer()``), files written in the order their messages
-were sent.
+(``rerun.chunk.ChunkStore.write_rrd``): a file costs the writer less CPU this way than through a
+``RecordingStream``, whose file sink and batcher start and join threads for every file; the
+chunks the scene's files share are built once. Its layout (blueprint) is a file beside it,
+``<application id>.rbl`` in the same folder, written once: a rerun file holds one store, and a
+blueprint is a store of its own, which rerun binds to recordings by their application id
+(``rigid-gym replay FILE`` opens both; so does ``rerun FOLDER/*``). The recorders only buffer an
+episode's rows in numpy and hand them to a writer process, which does all the rerun work while
+the env goes on: one writer per recording process, started at its first file (``writer()``),
+files written in the order their messages were sent.
 
 Messages are tuples, handed over in pickled lists on the writer's standard input:
 
@@ -176,7 +175,7 @@ class Writer:
         Ctrl-C (an uncaught KeyboardInterrupt, as this runs at exit) does not wait: the writer,
         which Ctrl-C does not reach, completes the files it was handed on its own once its
         input ends, while this process exits at once. A writer at its lower priority behind
-        busy cores can take many seconds to get there (rerun's import alone is ~0.5 s of CPU),
+        busy cores can take many seconds to get there (importing rerun comes first),
         and a Ctrl-C should stop the process now."""
         atexit.unregister(self.stop)
         if os.getpid() != self.owner:  # a forked child's copy: the parent's writer
@@ -370,7 +369,7 @@ class _Layout:
     def static(self, entity: str, key, archetypes) -> Chunk:
         """The static row of ``archetypes()`` at ``entity``, built once per ``key`` (a
         hashable stand-in for its values): static bodies' poses, goal marker shapes (Push's
-        disc, a 48-gon mesh, takes ~1 ms to build), action names."""
+        disc, a 48-gon mesh, is slow to build), action names."""
         if (entity, key) not in self.recurring:
             if len(self.recurring) >= RECURRING_CACHE:  # values that change every episode
                 self.recurring.clear()

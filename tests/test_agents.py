@@ -5,6 +5,8 @@ import json
 from pathlib import Path
 
 import gymnasium as gym
+import matplotlib.colors
+import matplotlib.image
 import numpy as np
 import pytest
 import torch as th
@@ -131,6 +133,8 @@ def test_the_results_table_and_curves_come_from_the_result_files(tmp_path):
     folder.mkdir()
     runs = [synthetic_result("rigid_gym/Push-v0", "sac", "SAC + HER", s, r, w)
             for s, r, w in ((0, 0.96, 300.0), (1, 0.90, 420.0), (2, 0.99, 360.0))]
+    runs.append(synthetic_result("rigid_gym/PushDense-v0", "ppo", "PPO, shaped reward", 0, 0.5,
+                                 600.0, steps=80_000))
     runs.append(synthetic_result("rigid_gym/Stack-v0", "bc_sac", "BC_SAC + HER + 500 demos", 0,
                                  0.8, 30.0, demo=50_000))
     for run in runs:
@@ -148,8 +152,28 @@ def test_the_results_table_and_curves_come_from_the_result_files(tmp_path):
     stack = next(line for line in lines if line.startswith("| rigid_gym/Stack-v0"))
     assert "| 40k + 50k demo | 30 s | 27 s | 1 | **80%** ± 0% (80%) |" in stack
     assert any("Machine: Test CPU, 2 cores" in line for line in lines)
-    for task in ("Push", "Stack"):
-        assert (tmp_path / "plots" / f"curve_{task}.png").stat().st_size > 10_000
+    # Push's plot: both methods' curves (matplotlib's C0 and C1), rising in either panel;
+    # Stack's: its one method's, and no other
+    for task, shown in (("Push", ("C0", "C1")), ("Stack", ("C0",))):
+        image = matplotlib.image.imread(tmp_path / "plots" / f"curve_{task}.png")[:, :, :3]
+        middle = image.shape[1] // 2
+        for colour in ("C0", "C1"):
+            for panel in (image[:, :middle], image[:, middle:]):
+                rows, columns = curve_pixels(panel, colour)
+                if colour not in shown:
+                    assert rows.size == 0, (task, colour)
+                    continue
+                assert rows.size > 200, (task, colour)
+                # success rises left to right: the curve's right end is drawn higher up
+                assert rows[columns == columns.max()].mean() < rows[columns == columns.min()].mean()
+
+
+def curve_pixels(image: np.ndarray, colour: str) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, columns) of the pixels of ``image`` (h, w, 3 floats in [0, 1]) drawn in the
+    matplotlib colour ``colour`` (within 0.1 a channel: the line's core, not its antialiased
+    edge or the shaded band)."""
+    target = np.array(matplotlib.colors.to_rgb(colour))
+    return np.nonzero(np.abs(image - target).max(axis=2) < 0.1)
 
 
 def test_the_curves_average_seeds_on_a_common_axis():

@@ -217,24 +217,49 @@ def test_bad_arguments_are_refused_before_anything_steps(kwargs, message):
 
 def test_sb3_trains_on_pixels_with_its_cnn():
     """SB3's MultiInputPolicy puts its NatureCNN on ``pixels``: PPO on the batched env and SAC
-    with HER (relabelling the goal vectors) on the single env train a few hundred steps."""
+    with HER (relabelling the goal vectors) on the single env train a few hundred steps. The
+    learners see the env's frames (channel first) and train the CNN on them; HER's relabelled
+    goals earn the rewards ``compute_reward`` gives them."""
     import torch
     from rigid_gym.agents.vec_env import SB3VecEnv
     from stable_baselines3 import PPO, SAC, HerReplayBuffer
     from stable_baselines3.common.torch_layers import NatureCNN
+
+    def cnn_weights(extractor):
+        return extractor.extractors["pixels"].cnn[0].weight.detach().clone()
 
     torch.set_num_threads(1)
     venv = SB3VecEnv(gym.make_vec("rigid_gym/PushDense-v0", num_envs=4, obs_mode="pixels"))
     ppo = PPO("MultiInputPolicy", venv, n_steps=32, batch_size=64, n_epochs=1, seed=0,
               policy_kwargs={"features_extractor_kwargs": {"cnn_output_dim": 32}})
     assert isinstance(ppo.policy.features_extractor.extractors["pixels"], NatureCNN)
-    ppo.learn(256)
-    assert ppo.num_timesteps >= 256
+    before = cnn_weights(ppo.policy.features_extractor)
+    ppo.learn(128)  # one rollout of 32 vector steps, one epoch
+    assert ppo.num_timesteps == 128
+    assert not torch.equal(cnn_weights(ppo.policy.features_extractor), before)
+    # the rollout's first observation: copy i reset with seed i (SB3's seed + i), as (3, h, w)
+    first = gym.make_vec("rigid_gym/PushDense-v0", num_envs=4, obs_mode="pixels").reset(
+        seed=0)[0]["pixels"]
+    # (flattened by training env-major: env i's step t at 32 i + t)
+    seen = ppo.rollout_buffer.observations["pixels"].reshape(4, 32, 3, 84, 84)[:, 0]
+    np.testing.assert_array_equal(seen, first.transpose(0, 3, 1, 2))
+    assert len({frame.tobytes() for frame in first}) == 4  # four different starts
+
     env = gym.make("rigid_gym/Push-v0", obs_mode="pixels", width=48, height=48)
     sac = SAC("MultiInputPolicy", env, replay_buffer_class=HerReplayBuffer, buffer_size=400,
               learning_starts=100, batch_size=16, seed=0,
               policy_kwargs={"features_extractor_kwargs": {"cnn_output_dim": 16},
                              "net_arch": [32]})
-    sac.learn(200)
-    assert sac.num_timesteps == 200
     assert isinstance(sac.actor.features_extractor.extractors["pixels"], NatureCNN)
+    before = cnn_weights(sac.actor.features_extractor)
+    sac.learn(150)
+    assert sac.num_timesteps == 150
+    assert not torch.equal(cnn_weights(sac.actor.features_extractor), before)
+    batch = sac.replay_buffer.sample(256)
+    pixels = batch.observations["pixels"].numpy()
+    assert pixels.shape == (256, 3, 48, 48) and pixels.std() > 0
+    achieved = batch.next_observations["achieved_goal"].numpy()
+    desired = batch.observations["desired_goal"].numpy()
+    rewards = env.unwrapped.compute_reward(achieved, desired, {})
+    np.testing.assert_array_equal(batch.rewards.numpy()[:, 0], rewards)
+    assert (rewards == 0).any()  # relabelled goals the random cube reached

@@ -1,6 +1,8 @@
 """The accuracy and stability report (rigid_gym.report): the quick report is complete, pass
 criteria can fail, observed orders are fitted right. No wall-clock time is asserted."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -33,10 +35,31 @@ def test_quick_report_writes_every_case_and_its_figures(quick_report):
         assert f"images/report/{png}" in text
 
 
+# Every stiff and extreme case of the report, as its title reads (durations and counts scale
+# with the report's length). Written out here, not read from stability.CASES, so that a case
+# dropped from the report, or a case function returning fewer results, fails.
+STIFF_TITLES = (r"10-cube tower, [\d.]+ s", r"20-cube tower, [\d.]+ s", r"40-cube tower, [\d.]+ s",
+                r"55-box pyramid, [\d.]+ s", r"heavy on light 100:1, [\d.]+ s",
+                r"heavy on light 1000:1, [\d.]+ s", r"fast spinner, .*", r"thin rod 50:1 .*",
+                r"e = 1, ball and tilted cube, .*", r"mu = 0, .*", r"mu = 5, .*",
+                r"ball vs 1 cm wall, .*", r"10-cube tower at dt = 1/1000 \.\.\. 1/30, .*",
+                r"cube dropped 1 m, alone and onto a cube, .*",
+                r"masses 1e-3 to 1e3 kg, two towers, .*",
+                r"sleeping: exact on a stack, stopping slow islands on a pyramid",
+                r"pile of \d+ bodies, .*")
+
+
 def test_every_stiff_case_reports_pass_or_fail_with_its_numbers(quick_report):
+    """Each of the 17 stiff cases has exactly one first row with its verdict, and no other
+    case has one; each failure is listed with its cause and bound."""
     text = (quick_report / "report.md").read_text()
     rows = [line for line in text.splitlines() if "| PASS |" in line or "| **FAIL** |" in line]
-    assert len(rows) >= 15  # every stiff result has a first row with its verdict
+    titles = [re.match(r"\| (.*?) \| (PASS|\*\*FAIL\*\*) \|", row).group(1) for row in rows]
+    for pattern in STIFF_TITLES:
+        matching = [title for title in titles if re.fullmatch(pattern, title)]
+        assert len(matching) == 1, f"stiff case {pattern!r}: rows {matching}"
+    assert len(titles) == len(STIFF_TITLES) == 17, titles
+    assert f"{len(titles) - sum('**FAIL**' in row for row in rows)} of 17 cases pass" in text
     failures = [line for line in text.splitlines() if line.startswith("- **")]
     assert len(failures) == sum("| **FAIL** |" in row for row in rows)
     assert all("Cause:" in line and "(bound" in line for line in failures)

@@ -223,10 +223,28 @@ def test_profile_counts_skipped_and_repeated_stages():
         name: 3 * count for name, count in calls.items()}
 
 
-def test_state_views_are_read_only():
-    world = rg.World(mixed_scene())
-    with pytest.raises(ValueError):
-        world.position[1, 0] = 3.0
+STATE_VIEWS = ("position", "orientation", "velocity", "angular_velocity",
+               "body_angular_momentum", "rotation")
+
+
+@pytest.mark.parametrize("num_worlds", [None, 2])
+def test_state_views_are_read_only(num_worlds):
+    """Every state view of a World, of a batch and of one world of a batch refuses a write
+    (state changes go through the setters, which wake what they touch), and the refused
+    write leaves the core's state as it was."""
+    world = rg.World(mixed_scene(), num_worlds=num_worlds)
+    before = tuple(array.copy() for array in world.state)
+    seen = [(world, STATE_VIEWS)]
+    if num_worlds is not None:  # a WorldView has no body_angular_momentum
+        seen.append((world.view(1), STATE_VIEWS[:4] + STATE_VIEWS[5:]))
+    for holder, names in seen:
+        for name in names:
+            view = getattr(holder, name)
+            assert not view.flags.writeable, name
+            with pytest.raises(ValueError, match="read-only"):
+                view[...] = 3.0
+    for array, old in zip(world.state, before):
+        assert array.tobytes() == old.tobytes()
 
 
 def test_an_attached_body_rides_with_its_parent_and_leaves_with_its_velocity():
