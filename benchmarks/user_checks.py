@@ -159,7 +159,8 @@ def check_replay() -> None:
         episode = Path(out) / "rigid_gym-Push-v0" / "r-episode-0.rrd"
         env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
         process = subprocess.Popen(RIGID_GYM + ["replay", str(episode)], env=env, text=True,
-                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+                                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                   start_new_session=True)  # Ctrl-C below reaches the viewer
         seen = ""
         deadline = time.monotonic() + 20
         while time.monotonic() < deadline and "Hosting a web-viewer" not in seen:
@@ -167,11 +168,11 @@ def check_replay() -> None:
             if not line:
                 break
             seen += line
-        process.send_signal(signal.SIGINT)
+        os.killpg(process.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the viewer too
         try:
             process.wait(10)
         except subprocess.TimeoutExpired:
-            process.kill()
+            os.killpg(process.pid, signal.SIGKILL)
             process.wait()
         address = re.search(r"connect at (\S+)", seen)
         report("no display" in seen and address is not None, "replay without a display",
