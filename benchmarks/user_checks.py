@@ -248,7 +248,9 @@ def check_metadata() -> None:
     author = meta.get("Author") or meta.get("Author-email")
     report(bool(author) and len(classifiers) >= 5 and bool(meta.get("License")),
            "package metadata", f"author {author!r}, license {meta.get('License')!r}, "
-           f"{len(classifiers)} classifiers, URLs {urls or 'none (no public address yet)'}")
+           f"{len(classifiers)} classifiers")
+    report(bool(urls), "package URLs", f"{urls or 'none: the project has no public address '}"
+           f"{'' if urls else 'yet; pyproject.toml gets [project.urls] when it is published'}")
 
 
 if __name__ == "__main__":
