@@ -22,6 +22,8 @@ import json
 import zipfile
 from pathlib import Path
 
+from rigid_gym.checks import BadFile
+
 ALGORITHMS = ("sac", "tqc", "ppo", "bc_sac")
 """What ``rigid-gym train`` trains (hyperparams.yml's ``algo``)."""
 LEARNERS = ("sbx", "sb3")
@@ -108,7 +110,7 @@ def find_algorithm(name: str):
 
 
 def algorithm_of(path: str | Path) -> str:
-    """The algorithm of a stable-baselines3 zip, from its policy class's module
+    """The algorithm of a stable-baselines3 zip (a BadFile where it is not one), from its policy class's module
     (``stable_baselines3.sac.policies`` -> ``sac``, SBX's ``sbx.sac.policies`` -> ``sbx:sac``);
     PPO and A2C share ``stable_baselines3.common.policies`` and only PPO saves a
     ``clip_range``."""
@@ -122,5 +124,5 @@ def algorithm_of(path: str | Path) -> str:
             return "PPO" if "clip_range" in data else "A2C"
         return module[1]
     except (zipfile.BadZipFile, KeyError, ValueError, IndexError) as exc:
-        raise ValueError(f"load_model: {path} is not a stable-baselines3 model zip whose "
-                         f"algorithm can be read ({exc}); pass the algorithm") from None
+        raise BadFile(f"{path} is not a stable-baselines3 model zip whose algorithm can be "
+                      f"read ({type(exc).__name__}: {exc})") from None

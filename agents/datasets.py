@@ -31,7 +31,9 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import json
 import os
+import shutil
 import subprocess
 import tempfile
 import warnings
@@ -43,9 +45,10 @@ import minari
 import numpy as np
 from minari import MinariDataset
 from minari.data_collector import EpisodeBuffer
+from minari.dataset.minari_dataset import DATASET_ID_RE
 
 import rigid_gym
-from rigid_gym.checks import in_range, integer
+from rigid_gym.checks import BadFile, in_range, integer
 
 DATA_FORMAT = "arrow"
 """Minari's storage format for these datasets (pyarrow; its default, hdf5, needs h5py)."""
@@ -97,9 +100,9 @@ RECIPE_EPISODES = 200
 
 def make_actor(env: gym.Env, policy: str, seed: int) -> Callable[[dict], np.ndarray]:
     """observation -> action for ``env``: ``policy`` random, scripted or a model .zip, as
-    ``rigid-gym record`` plays it (``rigid_gym.cli.make_policy``; random actions seeded with
-    ``seed``)."""
-    from rigid_gym.cli import make_policy
+    ``rigid-gym record`` plays it (``rigid_gym.agents.policies.make_policy``; random actions
+    seeded with ``seed``)."""
+    from .policies import make_policy
 
     return make_policy(env, policy, None, seed)
 
@@ -176,10 +179,11 @@ def create(dataset_id: str, env: gym.Env, episodes: list[EpisodeBuffer], policy:
     """Write ``episodes`` of ``env`` as the Minari dataset ``dataset_id`` (under
     MINARI_DATASETS_PATH), as its episodes 0, 1, ... in that order, with the metadata of the
     module docstring, and return it. extra: more metadata entries (JSON values)."""
+    checked_dataset_id(dataset_id)
     episodes = [dataclasses.replace(episode, id=k) for k, episode in enumerate(episodes)]
     version = code_version()
-    with warnings.catch_warnings():  # Minari asks for an e-mail address: the project has none
-        warnings.filterwarnings("ignore", message=".*author_email.*")
+    with removed_on_failure(dataset_id), warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*author_email.*")  # the project has none
         dataset = minari.create_dataset_from_buffers(
             dataset_id, episodes, env=env.spec, eval_env=env.spec,
             algorithm_name=Path(policy).name if policy.endswith(".zip") else policy,
@@ -187,10 +191,39 @@ def create(dataset_id: str, env: gym.Env, episodes: list[EpisodeBuffer], policy:
             f"commit {version['git_commit'] or 'unknown'}: agents/datasets.py",
             description=description, data_format=DATA_FORMAT,
             requirements=[f"rigid_gym=={version['rigid_gym_version']}"])
-    dataset.storage.update_metadata({"policy": policy, "action_noise": float(noise),
-                                     "success_rate": success_rate(episodes),
-                                     **version, **(extra or {})})
+        dataset.storage.update_metadata({"policy": policy, "action_noise": float(noise),
+                                         "success_rate": success_rate(episodes),
+                                         **version, **(extra or {})})
     return dataset
+
+
+def checked_dataset_id(dataset_id: str) -> str:
+    """``dataset_id`` if Minari takes it as a new dataset's id, ``[namespace/]name-v<k>``
+    (e.g. rigid_gym/push/expert-v0); else a ValueError saying the form, raised before
+    anything is played or written."""
+    match = DATASET_ID_RE.fullmatch(dataset_id) if isinstance(dataset_id, str) else None
+    if match is None or match.group("version") is None:
+        raise ValueError(f"dataset: {dataset_id!r} is not a dataset id; Minari's ids are "
+                         "[namespace/]name-v<version>, the namespace's parts of 2 or more "
+                         "letters, digits, - or _ (e.g. rigid_gym/push/expert-v0, "
+                         "my-push-v0)")
+    return dataset_id
+
+
+@contextlib.contextmanager
+def removed_on_failure(dataset_id: str) -> Iterator[None]:
+    """Where the ``with`` block (writing ``dataset_id``) fails, delete what it made under
+    the datasets' folder: the dataset's folder and the namespace folders that did not exist
+    before, so that a failed write leaves nothing that a later one trips over."""
+    root = datasets_root()
+    made = [root / dataset_id] + [root / p for p in Path(dataset_id).parents if str(p) != "."]
+    new = [folder for folder in made if not folder.exists()]
+    try:
+        yield
+    except BaseException:
+        for folder in new:  # the dataset's folder first, then its namespaces inside out
+            shutil.rmtree(folder, ignore_errors=True)
+        raise
 
 
 def write_dataset(dataset_id: str, env_id: str, policy: str, episodes: int, noise: float = 0.0,
@@ -202,6 +235,7 @@ def write_dataset(dataset_id: str, env_id: str, policy: str, episodes: int, nois
     if env_id not in rigid_gym.ENV_IDS:
         raise ValueError(f"dataset: unknown env id {env_id!r}; choose from "
                          f"{', '.join(rigid_gym.ENV_IDS)}")
+    checked_dataset_id(dataset_id)
     integer(episodes, "dataset: episodes", 1, 2 ** 32)
     integer(seed, f"dataset: seed (with {episodes} episodes, seeded seed + k)", 0,
             2 ** 32 - episodes)
@@ -278,12 +312,59 @@ def temporary_datasets_root() -> Iterator[Path]:
 
 
 def load(dataset_id: str) -> MinariDataset:
-    """``minari.load_dataset(dataset_id)``, with an error naming the folder searched."""
+    """``minari.load_dataset(dataset_id)`` once its files are checked (``check_files``),
+    with an error naming the folder searched where there is no such dataset."""
+    folder = datasets_root() / dataset_id
+    if not isinstance(dataset_id, str) or not (folder / "data").is_dir():
+        raise ValueError(f"dataset: no dataset {dataset_id} in {datasets_root()} "
+                         "(MINARI_DATASETS_PATH)")
+    check_files(dataset_id, folder / "data")
     try:
         return minari.load_dataset(dataset_id)
-    except FileNotFoundError:
-        raise ValueError(f"dataset: no dataset {dataset_id} in {datasets_root()} "
-                         "(MINARI_DATASETS_PATH)") from None
+    except (OSError, ValueError, KeyError) as exc:  # what check_files does not look at
+        raise BadFile(f"dataset {dataset_id}: Minari cannot load {folder}: {exc}") from None
+
+
+def check_files(dataset_id: str, folder: Path) -> None:
+    """Check that dataset ``dataset_id``'s ``folder`` (its ``data`` folder, in Minari's arrow
+    layout) holds its metadata.json and, per episode k < total_episodes, a folder ``k`` with
+    a metadata.json and whole .arrow files; else a BadFile naming the file. Reads every
+    file once (what a replay reads anyway)."""
+    import pyarrow as pa
+
+    damaged = f"; the dataset {dataset_id} is damaged: write it again, or delete it " \
+              f"(minari delete {dataset_id})"
+
+    def json_file(path: Path) -> dict:
+        try:
+            value = json.loads(path.read_text())
+        except FileNotFoundError:
+            raise BadFile(f"dataset: {path} is missing{damaged}") from None
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise BadFile(f"dataset: {path} is not readable JSON ({exc}){damaged}") from None
+        if not isinstance(value, dict):
+            raise BadFile(f"dataset: {path} holds no JSON object{damaged}")
+        return value
+
+    total = json_file(folder / "metadata.json").get("total_episodes")
+    if isinstance(total, bool) or not isinstance(total, int) or total < 0:
+        raise BadFile(f"dataset: {folder / 'metadata.json'} has no total_episodes{damaged}")
+    for k in range(total):
+        episode = folder / str(k)
+        if not episode.is_dir():
+            raise BadFile(f"dataset: episode {k}'s folder {episode} is missing{damaged}")
+        json_file(episode / "metadata.json")
+        parts = sorted(episode.glob("*.arrow"))
+        if not parts:
+            raise BadFile(f"dataset: episode {k}'s folder {episode} holds no .arrow file"
+                          f"{damaged}")
+        for part in parts:
+            try:
+                with pa.memory_map(str(part)) as source:
+                    pa.ipc.open_file(source).read_all()
+            except (OSError, pa.ArrowException) as exc:
+                raise BadFile(f"dataset: {part} is not a whole Arrow file ({exc}){damaged}") \
+                    from None
 
 
 def episode_seeds(dataset: MinariDataset) -> list[int | None]:

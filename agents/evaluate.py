@@ -16,12 +16,14 @@ beside ``<name>.zip`` (the committed models in agents/models/).
 from __future__ import annotations
 
 import json
+import zipfile
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 
 import rigid_gym  # noqa: F401  (registers the env ids)
+from rigid_gym.checks import BadFile
 
 from .algorithms import algorithm_of, find_algorithm
 from .progress import bar
@@ -66,10 +68,10 @@ def load_model(path: str | Path, env: gym.Env, algo: str | None = None):
     zip (:func:`algorithm_of`); a zip that SBX saved loads into SBX's class whatever
     ``algo`` says."""
     if not Path(path).is_file():
-        raise ValueError(f"load_model: no model file at {path}")
+        raise BadFile(f"model file {path} not found")
     try:
         found = algorithm_of(path)
-    except ValueError:
+    except BadFile:
         if algo is None:
             raise
         found = None
@@ -80,6 +82,8 @@ def load_model(path: str | Path, env: gym.Env, algo: str | None = None):
     cls = find_algorithm(name)
     try:
         return cls.load(path, env=env, device="cpu")
+    except zipfile.BadZipFile as exc:
+        raise BadFile(f"{path} is not a model zip ({exc})") from None
     except ValueError as exc:  # spaces that differ from the env's
         name = env.spec.id if env.spec is not None else type(env.unwrapped).__name__
         raise ValueError(f"load_model: {path} does not fit {name}: {exc}") from None
@@ -102,6 +106,8 @@ def evaluate(model_path: str | Path, env_id: str | None = None, episodes: int = 
     """Success rate and returns of a saved model over ``episodes`` seeded episodes; the env
     id and the algorithm default to the model's settings file (``run_metadata``).
     ``progress``: draw a bar of the episodes on standard error."""
+    if not Path(model_path).is_file():
+        raise BadFile(f"model file {model_path} not found")
     meta = run_metadata(model_path)
     env_id = env_id or meta.get("env_id")
     if env_id is None:

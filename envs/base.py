@@ -23,10 +23,11 @@ from gymnasium import spaces
 from gymnasium.error import ResetNeeded
 
 from rigid_gym.recordable import Series
+from rigid_gym.snapshots import SavedStates
 
 from .core import ALL, TaskBatch
-from .options import ARGUMENTS_TABLE, Options, checked_actions
-from .pixels import DEFAULT_SIZE, PixelOptions
+from .options import ARGUMENTS_TABLE, Options, checked_actions, refuse_unknown
+from .pixels import PixelOptions
 from .task import STEP_TIME, Task
 
 if TYPE_CHECKING:
@@ -62,12 +63,18 @@ class RigidGymEnv(gym.Env):
     def __init__(self, render_mode: str | None = None, reward_type: str = "sparse",
                  terminate_on_success: bool = False, randomize: bool | dict = False,
                  observation_noise: float = 0.0, obs_mode: str = "state",
-                 width: int = DEFAULT_SIZE, height: int = DEFAULT_SIZE, camera="front",
-                 goal_marker: bool = True):
+                 width: int | None = None, height: int | None = None, camera="front",
+                 goal_marker: bool = True, render_width: int | None = None,
+                 render_height: int | None = None, render_target_position=None,
+                 render_distance: float | None = None, render_yaw: float | None = None,
+                 render_pitch: float | None = None, **unknown):
         name = type(self).__name__
-        self.options = Options.checked(name, render_mode, reward_type, terminate_on_success,
-                                       randomize, observation_noise, obs_mode, width, height,
-                                       camera, goal_marker)
+        refuse_unknown(name, unknown)
+        self.options = Options.checked(
+            name, render_mode, reward_type, terminate_on_success, randomize, observation_noise,
+            obs_mode, width, height, camera, goal_marker, render_width=render_width,
+            render_height=render_height, render_target_position=render_target_position,
+            render_distance=render_distance, render_yaw=render_yaw, render_pitch=render_pitch)
         self.render_mode = render_mode
         self.observation_space, self.action_space = task_spaces(self.task, self.options.pixels)
         size = self.action_space.shape[0]
@@ -81,6 +88,8 @@ class RigidGymEnv(gym.Env):
         self.viewer: bool | None = None
         """render_mode='human': whether frames go to the rerun viewer (a display was found at
         the first render), None until then."""
+        self.saved: SavedStates[tuple] = SavedStates(name)
+        """The states kept by ``save_state`` by id."""
 
     @classmethod
     def split_arguments(cls, kwargs: dict) -> tuple[Task, dict]:
@@ -93,6 +102,10 @@ class RigidGymEnv(gym.Env):
     # -- the Gymnasium API -------------------------------------------------------------------
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """A new episode, drawn from the env's generator (seeded first where ``seed`` is
+        given). ``options``: no task takes any; None or {} only (anything else is refused
+        rather than silently ignored)."""
+        refuse_options(f"{type(self).__name__}.reset", options)
         super().reset(seed=seed)
         outcome = self.core.reset(ALL, [self.np_random])
         self.renderer = None
@@ -144,6 +157,30 @@ class RigidGymEnv(gym.Env):
     def close(self):
         self.renderer = None
 
+    # -- snapshots (rigid_gym.snapshots) ----------------------------------------------------
+
+    def save_state(self) -> int:
+        """Keep a copy of the env's whole state and return its id (an int), as panda-gym's
+        ``save_state``: the World (every body, the solver's carried-over bookkeeping), the
+        gripper (what it holds), the goal, the generator (so resets and noise draw the same),
+        the time. From ``restore_state(id)`` the env steps on bit for bit as it did from here
+        with the same actions. Wrappers keep their own state: TimeLimit's step count is not
+        the env's (call this on ``env.unwrapped``; ``copy.deepcopy(env)`` copies wrappers
+        too)."""
+        return self.saved.save(self.core.copy(self._np_random, self._np_random_seed))
+
+    def restore_state(self, state_id: int) -> None:
+        """Put the env back to the state saved as ``state_id`` (``save_state``), which stays
+        saved. The env's ``world`` and ``gripper`` are then new objects: read them again
+        through the env."""
+        saved = self.saved.get(state_id, "restore_state")
+        self.core, self._np_random, self._np_random_seed = saved[0].copy(*saved[1:])
+        self.renderer = None
+
+    def remove_state(self, state_id: int) -> None:
+        """Forget the state saved as ``state_id``, freeing its memory."""
+        self.saved.remove(state_id)
+
     # -- what a recorder reads (rigid_gym.recordable) --------------------------------------
 
     @property
@@ -153,8 +190,9 @@ class RigidGymEnv(gym.Env):
 
     @property
     def camera_view(self) -> tuple:
-        """(eye (3,) m, target (3,) m, vertical field of view (deg)) of rgb_array frames."""
-        return self.task.camera_view
+        """(eye (3,) m, target (3,) m, vertical field of view (deg)) of rgb_array frames: the
+        task's view, moved by the render_* camera arguments."""
+        return self.options.render.view(self.task.camera_view)
 
     def scalars(self, action, reward, info) -> list[float]:
         """One step's values of ``scalar_series``: the reward, the action as passed to
@@ -200,13 +238,15 @@ class RigidGymEnv(gym.Env):
         return self.task.num_cubes
 
     def frame(self) -> np.ndarray:
-        """The rgb_array frame (480, 480, 3) uint8 of the current state: the bodies and the
-        goal markers seen from ``camera_view``."""
+        """The rgb_array frame (render_height, render_width, 3) uint8 of the current state:
+        the bodies and the goal markers seen from ``camera_view``."""
         from rigid_gym.render import Camera, Renderer
 
         if self.renderer is None:
             eye, target, fov = self.camera_view
-            self.renderer = Renderer(self.scene, camera=Camera(eye, target, fov_deg=fov),
+            size = self.options.render
+            self.renderer = Renderer(self.scene, size.width, size.height,
+                                     camera=Camera(eye, target, fov_deg=fov),
                                      face_colors=self.task.face_colors(self.cubes))
             for m in self.markers():
                 self.renderer.add_marker(m.shape, m.position, m.color, m.alpha, m.orientation,
@@ -227,6 +267,14 @@ def task_spaces(task: Task, pixels: PixelOptions) -> tuple[spaces.Dict, spaces.B
         keys["pixels"] = pixels.space()
     return spaces.Dict(keys), spaces.Box(-1.0, 1.0, shape=(3 + int(task.has_grip),),
                                          dtype=np.float32)
+
+
+def refuse_options(where: str, options) -> None:
+    """A ValueError for reset ``options`` other than None or an empty dict: no task has any
+    (an episode is drawn from the generator alone, so that a seed replays it)."""
+    if options is not None and options != {}:
+        raise ValueError(f"{where}: options: the tasks take no reset options (an episode is "
+                         f"drawn from the seed alone); pass None, got {options!r}")
 
 
 def single(observations: dict) -> dict:

@@ -16,6 +16,7 @@ once, runs SOLVER_STEPS solver steps of all worlds in one call and observes all 
 
 from __future__ import annotations
 
+import copy
 from typing import NamedTuple
 
 import numpy as np
@@ -137,6 +138,16 @@ class TaskBatch:
         if self.options.pixels.pixels:
             self.frames = CopyFrames(scene, self.task, half, self.options.pixels,
                                      self.num_worlds, self.cubes)
+
+    def copy(self, *carried):
+        """A deep copy of this batch (its World, gripper, goals, generators, frames) and of
+        ``carried`` (what the env keeps beside it: its generator, step counts), in one copy so
+        that what they share (a single env's generator is its copy's) stays shared; the task
+        and the options, which never change, are not copied. What ``save_state`` keeps and
+        ``restore_state`` puts back (as a copy again, so a state restores any number of
+        times)."""
+        memo = {id(self.task): self.task, id(self.options): self.options}
+        return copy.deepcopy((self, *carried), memo)
 
     def built(self) -> tuple[World, SuctionGripper]:
         """The World and its gripper, which the first reset builds."""

@@ -70,19 +70,36 @@ class SuctionGripper:
         self.step_time = step_time
         self.workspace = workspace
         self.held = np.full(world.num_worlds, -1, dtype=np.int64)
-        # what every command passes to the core, fixed once (the pads, the boxes, the fixtures'
-        # box parts, the workspace)
-        fixed_bodies, fixed_offsets, fixed_rotations, fixed_halves = fixture_boxes(fixtures)
-        self.pads = Pads(num_worlds=world.num_worlds, num_bodies=len(world.scene), pad=body,
-                         pad_half=PAD_HALF_EXTENTS, objects=self.objects,
-                         halves=self.half_extents, low=workspace.low, high=workspace.high,
-                         fixed_bodies=fixed_bodies, fixed_offsets=fixed_offsets,
-                         fixed_rotations=fixed_rotations, fixed_halves=fixed_halves,
-                         step_distance=STEP_DISTANCE, step_time=step_time)
+        self.num_bodies = len(world.scene)
+        self.fixed = fixture_boxes(fixtures)
+        self.pads = self.made_pads()
         # a contact within GRIP_MARGIN needs the centres within the two bounding spheres
         reach = (np.linalg.norm(PAD_HALF_EXTENTS) + np.linalg.norm(self.half_extents, axis=1)
                  + GRIP_MARGIN + REACH_SLACK)
         self.reach_squared = reach * reach
+
+    def made_pads(self) -> Pads:
+        """The core's gripper object for these pads: what every command passes to the core,
+        fixed once (the pad, the boxes, the fixtures' box parts, the workspace), and the
+        command's work rows."""
+        fixed_bodies, fixed_offsets, fixed_rotations, fixed_halves = self.fixed
+        return Pads(num_worlds=len(self.held), num_bodies=self.num_bodies, pad=self.body,
+                    pad_half=PAD_HALF_EXTENTS, objects=self.objects, halves=self.half_extents,
+                    low=self.workspace.low, high=self.workspace.high,
+                    fixed_bodies=fixed_bodies, fixed_offsets=fixed_offsets,
+                    fixed_rotations=fixed_rotations, fixed_halves=fixed_halves,
+                    step_distance=STEP_DISTANCE, step_time=self.step_time)
+
+    def __getstate__(self) -> dict:
+        """What pickle and copy.deepcopy keep: every field but the core's ``Pads``, which
+        ``__setstate__`` makes again from them (it holds nothing between commands)."""
+        state = self.__dict__.copy()
+        del state["pads"]
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self.pads = self.made_pads()
 
     @property
     def position(self) -> np.ndarray:

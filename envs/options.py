@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from rigid_gym.checks import in_range
+from rigid_gym.checks import in_range, integer, vector
 
 from .pixels import DEFAULT_SIZE, PixelOptions
 
@@ -31,16 +31,100 @@ friction (one factor per body), ``restitution`` is each cube's coefficient."""
 
 ARGUMENTS_TABLE = """| argument | default | meaning |
     |---|---|---|
-    | render_mode | None | "rgb_array" (480 x 480 frames, no display needed) or "human" (rerun viewer) |
+    | render_mode | None | "rgb_array" (frames (render_height, render_width, 3), no display needed) or "human" (rerun viewer) |
     | reward_type | "sparse" | "sparse", "dense" (the ``Dense`` ids) or "shaped" (staged, for on-policy learners) |
     | terminate_on_success | False | end the episode when the goal is reached |
     | randomize | False | True, or a dict of ranges, to redraw cube mass, size, restitution and friction each reset (``rigid_gym.envs.options.RANDOMIZATION``) |
     | observation_noise | 0.0 | standard deviation of Gaussian noise on ``observation`` |
     | obs_mode | "state" | "state", "pixels" (``pixels`` (height, width, 3) uint8 and the goals) or "state+pixels" (``rigid_gym.envs.pixels``) |
-    | width, height | 84 | frame size of ``pixels``, in [16, 1024] pixels |
+    | width, height | 84 | frame size of ``pixels``, in [16, 1024] pixels; given, also of ``render()`` |
     | camera | "front" | the frame's camera: "front", "top", "side" (``rigid_gym.envs.pixels.CAMERAS``) or a ``rigid_gym.render.Camera`` |
-    | goal_marker | True | draw the goal marker in ``pixels`` |"""
+    | goal_marker | True | draw the goal marker in ``pixels`` |
+    | render_width, render_height | width, height if given, else 480 | frame size of ``render()``, in [16, 4096] pixels (panda-gym's names) |
+    | render_target_position, render_distance, render_yaw, render_pitch | the task's view | ``render()``'s camera as panda-gym (PyBullet) places it: looking at the target (3,) m from ``distance`` m, turned ``yaw`` degrees about z (0: from -y) and ``pitch`` degrees about the horizontal (-30: from above), in (-90, 90); each not given keeps the task's view's |"""
 """The constructor arguments every task shares, as its docstring's "Arguments" table."""
+
+
+RENDER_SIZE = 480
+"""render()'s frame width and height by default, pixels (where ``width``/``height`` are not
+given)."""
+RENDER_SIZE_RANGE = (16, 4096)
+ARGUMENTS = ("render_mode", "reward_type", "terminate_on_success", "randomize",
+             "observation_noise", "obs_mode", "width", "height", "camera", "goal_marker",
+             "render_width", "render_height", "render_target_position", "render_distance",
+             "render_yaw", "render_pitch")
+"""Every task's constructor arguments (ARGUMENTS_TABLE), in order."""
+
+
+def refuse_unknown(where: str, given) -> None:
+    """A ValueError naming the arguments in ``given`` (names) that no task takes, and the
+    ones they take; nothing when every name is known."""
+    unknown = sorted(set(given) - set(ARGUMENTS))
+    if unknown:
+        raise ValueError(f"{where}: unknown argument(s) {unknown}; the arguments are "
+                         f"{', '.join(ARGUMENTS)}")
+
+
+@dataclass(frozen=True)
+class RenderOptions:
+    """``render()``'s frame size (pixels) and camera, checked (``RenderOptions.checked``):
+    panda-gym's arguments; a camera argument of None keeps the task's view's."""
+
+    width: int
+    height: int
+    target_position: tuple | None = None
+    distance: float | None = None
+    yaw: float | None = None
+    pitch: float | None = None
+
+    @classmethod
+    def checked(cls, where: str, width: int | None, height: int | None,
+                render_width: int | None = None, render_height: int | None = None,
+                render_target_position=None, render_distance: float | None = None,
+                render_yaw: float | None = None, render_pitch: float | None = None,
+                ) -> RenderOptions:
+        """The arguments, or a ValueError that starts with ``where``. The frame is
+        render_width x render_height, else the env's width x height where given, else
+        RENDER_SIZE."""
+        low, high = RENDER_SIZE_RANGE
+        size = []
+        for name, value, fallback in (("render_width", render_width, width),
+                                      ("render_height", render_height, height)):
+            value = value if value is not None else fallback if fallback is not None \
+                else RENDER_SIZE
+            size.append(integer(value, f"{where}: {name}", low, high, unit="pixels"))
+        target = None if render_target_position is None else tuple(
+            vector(render_target_position, 3, f"{where}: render_target_position").tolist())
+        distance = None if render_distance is None else in_range(
+            render_distance, 0.0, 100.0, f"{where}: render_distance", open_low=True, unit="m")
+        yaw = None if render_yaw is None else in_range(
+            render_yaw, -360.0, 360.0, f"{where}: render_yaw", unit="degrees")
+        pitch = None if render_pitch is None else in_range(
+            render_pitch, -89.9, 89.9, f"{where}: render_pitch", unit="degrees")
+        return cls(size[0], size[1], target, distance, yaw, pitch)
+
+    def view(self, default: tuple) -> tuple:
+        """(eye (3,) m, target (3,) m, vertical field of view (deg)): ``default`` (the task's
+        view, the same form) with the given camera arguments in place of its own. As PyBullet
+        places a camera (``computeViewMatrixFromYawPitchRoll``, z up): eye = target +
+        distance (cos(pitch) sin(yaw), -cos(pitch) cos(yaw), -sin(pitch))."""
+        eye, target, fov = (np.asarray(default[0], float), np.asarray(default[1], float),
+                            default[2])
+        if self.target_position is None and self.distance is None and self.yaw is None \
+                and self.pitch is None:
+            return tuple(eye.tolist()), tuple(target.tolist()), fov
+        offset = eye - target
+        distance = float(np.linalg.norm(offset))
+        yaw = math.degrees(math.atan2(offset[0], -offset[1]))
+        pitch = -math.degrees(math.asin(offset[2] / distance))
+        target = np.asarray(self.target_position if self.target_position is not None
+                            else target)
+        distance = self.distance if self.distance is not None else distance
+        y = math.radians(self.yaw if self.yaw is not None else yaw)
+        p = math.radians(self.pitch if self.pitch is not None else pitch)
+        eye = target + distance * np.array([math.cos(p) * math.sin(y),
+                                            -math.cos(p) * math.cos(y), -math.sin(p)])
+        return tuple(eye.tolist()), tuple(target.tolist()), fov
 
 
 @dataclass(frozen=True)
@@ -57,15 +141,18 @@ class Options:
     randomization: dict
     observation_noise: float
     pixels: PixelOptions
+    render: RenderOptions
 
     @classmethod
     def checked(cls, where: str, render_mode: str | None = None, reward_type: str = "sparse",
                 terminate_on_success: bool = False, randomize: bool | dict = False,
                 observation_noise: float = 0.0, obs_mode: str = "state",
-                width: int = DEFAULT_SIZE, height: int = DEFAULT_SIZE, camera="front",
-                goal_marker: bool = True) -> Options:
+                width: int | None = None, height: int | None = None, camera="front",
+                goal_marker: bool = True, **render) -> Options:
         """The arguments of ARGUMENTS_TABLE, or a ValueError that starts with ``where``
-        (the env class's name)."""
+        (the env class's name); ``render``: the render_* arguments. A width or height of
+        None is DEFAULT_SIZE for ``pixels`` and leaves render()'s size to its default."""
+        refuse_unknown(where, render)
         if render_mode is not None and render_mode not in RENDER_MODES:
             raise ValueError(f"{where}: render_mode must be None or one of "
                              f"{list(RENDER_MODES)}, got {render_mode!r}")
@@ -78,7 +165,11 @@ class Options:
         noise = in_range(observation_noise, 0.0, np.inf, f"{where}: observation_noise")
         return cls(render_mode, reward_type, terminate_on_success,
                    randomization_ranges(randomize, where), noise,
-                   PixelOptions.checked(where, obs_mode, width, height, camera, goal_marker))
+                   PixelOptions.checked(where, obs_mode,
+                                        DEFAULT_SIZE if width is None else width,
+                                        DEFAULT_SIZE if height is None else height, camera,
+                                        goal_marker),
+                   RenderOptions.checked(where, width, height, **render))
 
 
 def randomization_ranges(randomize, where: str) -> dict:

@@ -23,13 +23,14 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from rigid_gym.checks import integer
+from rigid_gym.snapshots import SavedStates
 
 from . import TASKS
-from .base import RigidGymEnv, task_spaces
+from .base import RigidGymEnv, refuse_options, task_spaces
 from .core import ALL, TaskBatch
 from .flip import FlipEnv
 from .insert import InsertEnv
-from .options import Options, checked_actions
+from .options import Options, checked_actions, refuse_unknown
 from .pick_and_place import PickAndPlaceEnv
 from .push import PushEnv
 from .reach import ReachEnv
@@ -57,15 +58,18 @@ class RigidGymVectorEnv(VectorEnv):
         name = f"{env_class.__name__} vector env"
         integer(num_envs, f"{name}: num_envs", 1)
         integer(max_episode_steps, f"{name}: max_episode_steps", 1)
-        if kwargs.get("render_mode") is not None:
-            raise ValueError(f"{name}: render_mode must be None (render a single env, or record "
-                             "one with rigid_gym.recording)")
+        task, kwargs = env_class.split_arguments(kwargs)  # the task's own (Tower's num_cubes)
+        refuse_unknown(name, kwargs)
+        rendering = sorted(k for k, v in kwargs.items() if k.startswith("render") and v is not None)
+        if rendering:
+            raise ValueError(f"{name}: {', '.join(rendering)} must be None (a vector env does "
+                             "not render: render a single env, or record one with "
+                             "rigid_gym.recording)")
         randomize = kwargs.get("randomize", False)
         if randomize is True or (isinstance(randomize, dict) and "size" in randomize):
             raise ValueError(f"{name}: the copies share one geometry, so randomize cannot include "
                              "'size'; pass a dict of the other ranges (mass, friction, "
                              "restitution)")
-        task, kwargs = env_class.split_arguments(kwargs)
         self.options = Options.checked(env_class.__name__, **kwargs)
         self.core = TaskBatch(task, self.options, int(num_envs), env_class.__name__)
         self.core.build(np.full(task.num_cubes, CUBE_HALF))
@@ -77,6 +81,8 @@ class RigidGymVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.elapsed = np.zeros(self.num_envs, dtype=np.int64)
         self.action_argument = f"{type(self).__name__}.step: actions"  # as errors name it
+        self.saved: SavedStates[tuple] = SavedStates(type(self).__name__)
+        """The states kept by ``save_state`` by id."""
 
     @property
     def world(self):
@@ -86,7 +92,8 @@ class RigidGymVectorEnv(VectorEnv):
     def reset(self, *, seed: int | list | None = None, options: dict | None = None):
         """Reset every copy; ``seed``: None, an int (copy i gets seed + i) or one per copy. A
         copy given no seed goes on with its generator (a random one at its first reset), as
-        ``gym.Env.reset`` does."""
+        ``gym.Env.reset`` does. ``options``: None or {} (``RigidGymEnv.reset``)."""
+        refuse_options(f"{type(self).__name__}.reset", options)
         if seed is None or isinstance(seed, (int, np.integer)):
             seeds = [None if seed is None else int(seed) + i for i in range(self.num_envs)]
         else:
@@ -120,6 +127,23 @@ class RigidGymVectorEnv(VectorEnv):
     def compute_reward(self, achieved_goal, desired_goal, info=None):
         """The task's reward for goals of shape (..., goal_size) (as the single env's)."""
         return self.core.compute_reward(achieved_goal, desired_goal)
+
+    # -- snapshots (rigid_gym.snapshots) ----------------------------------------------------
+
+    def save_state(self) -> int:
+        """Keep a copy of every copy's state (its world, gripper, goal, generator and step
+        count in the episode) and return its id (an int); as ``RigidGymEnv.save_state``."""
+        return self.saved.save(self.core.copy(self.elapsed))
+
+    def restore_state(self, state_id: int) -> None:
+        """Put every copy back to the state saved as ``state_id``, which stays saved; from
+        there each steps on bit for bit as it did with the same actions."""
+        saved = self.saved.get(state_id, "restore_state")
+        self.core, self.elapsed = saved[0].copy(*saved[1:])
+
+    def remove_state(self, state_id: int) -> None:
+        """Forget the state saved as ``state_id``, freeing its memory."""
+        self.saved.remove(state_id)
 
 
 def every_copy(successes: np.ndarray) -> dict:

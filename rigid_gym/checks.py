@@ -104,3 +104,9 @@ def finite_array(value, shape: tuple[int, ...], where: str) -> np.ndarray:
         raise ValueError(f"{where}: must be finite, got {value!r}")
     arr.setflags(write=False)
     return arr
+
+
+class BadFile(RuntimeError):
+    """A file a command reads is missing, cut short or not what it should be. The message
+    names the file and says what to do; ``rigid-gym`` prints it without a traceback or its
+    usage (the arguments were fine: the file is not)."""

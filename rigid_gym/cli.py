@@ -3,7 +3,7 @@
     rigid-gym demo [--steps N] [--dt S] [--order {1,2,3}]
     rigid-gym record ENV_ID [--policy random|scripted|MODEL.zip] [--algo NAME] [--episodes N]
                      [--seed S] [--out DIR] [--run NAME] [--contacts]
-    rigid-gym replay FILE [FILE ...]
+    rigid-gym replay FILE [FILE ...] [--web]
     rigid-gym train ENV_ID [--algo sac|tqc|ppo|bc_sac] [--learner auto|sbx|sb3] [--steps N]
                     [--seed S] [--n-envs N] [--out DIR] [--eval-freq N] [--eval-episodes N]
                     [--final-episodes N] [--results DIR] [--checkpoint-freq N] [--resume]
@@ -47,7 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rigid_gym.checks import allowed
+from rigid_gym.checks import BadFile, allowed
 
 
 def timed_steps(world, steps: int) -> float:
@@ -124,6 +124,7 @@ def record(env_id: str, policy: str, algo: str | None, episodes: int, seed: int,
     """Record ``episodes`` episodes of ``env_id`` driven by ``policy``; print each file."""
     import gymnasium as gym
 
+    from rigid_gym.agents.policies import make_policy
     from rigid_gym.recording import RecordRerun
 
     env = RecordRerun(gym.make(env_id), out, episode_trigger=lambda k: True,
@@ -150,23 +151,6 @@ def record(env_id: str, policy: str, algo: str | None, episodes: int, seed: int,
 def policy_name(policy: str) -> str:
     """The run-name part of a --policy value: random, scripted or the model file's stem."""
     return Path(policy).stem if policy.endswith(".zip") else policy
-
-
-def make_policy(env, policy: str, algo: str | None, seed: int):
-    """observation -> action for ``env``: random (the action space sampled, seeded with
-    ``seed``), scripted (``rigid_gym.envs.scripted``) or a stable-baselines3 model .zip (its
-    algorithm ``algo``, else its settings file's, else the zip's)."""
-    if policy == "random":
-        env.action_space.seed(seed)
-        return lambda observation: env.action_space.sample()
-    if policy == "scripted":
-        from rigid_gym.envs.scripted import scripted_policy
-
-        return scripted_policy(env)
-    from rigid_gym.agents.evaluate import load_model, run_metadata
-
-    model = load_model(policy, env, algo or run_metadata(policy).get("algo"))
-    return lambda observation: model.predict(observation, deterministic=True)[0]
 
 
 def train(args) -> int:
@@ -273,9 +257,11 @@ def dataset(args) -> int:
     return 0
 
 
-def replay(files: list[str]) -> int:
+def replay(files: list[str], web: bool = False) -> int:
     """Open ``files`` in the rerun viewer, with the layout (blueprint file) beside each;
-    returns the viewer's exit status."""
+    returns the viewer's exit status. ``web``, or no display (Linux without DISPLAY and
+    WAYLAND_DISPLAY, where the native viewer cannot open a window): rerun's web viewer,
+    served to a browser at the address it prints, until Ctrl-C."""
     missing = [f for f in files if not Path(f).is_file()]
     if missing:
         print(f"rigid-gym replay: no such file: {', '.join(missing)}", file=sys.stderr)
@@ -285,10 +271,27 @@ def replay(files: list[str]) -> int:
         print(f"rigid-gym replay: the rerun viewer was not found next to {sys.executable} or on "
               "PATH; it comes with pip install 'rerun-sdk==0.41.*'", file=sys.stderr)
         return 1
+    from rigid_gym.envs.base import display_available
     from rigid_gym.recording import blueprint_of
 
     layouts = {str(b): None for b in map(blueprint_of, files) if b is not None}  # in order, once
-    return subprocess.call([viewer, *files, *(b for b in layouts if b not in files)])
+    opened = [*files, *(b for b in layouts if b not in files)]
+    if not web and not display_available():
+        print("rigid-gym replay: no display (DISPLAY and WAYLAND_DISPLAY are unset), so no "
+              "window can open: serving the recordings to a browser with rerun's web viewer "
+              "instead (rerun --web-viewer). Open the address it prints below; from another "
+              "machine, forward its two ports first (ssh -L 9090:localhost:9090 -L "
+              "9876:localhost:9876 HOST). Ctrl-C stops it.", file=sys.stderr, flush=True)
+        web = True
+    if web:
+        return subprocess.call([viewer, "--web-viewer", *opened])
+    status = subprocess.call([viewer, *opened])
+    if status != 0:
+        print(f"rigid-gym replay: the rerun viewer exited with status {status}; where it "
+              "could not open a window, rigid-gym replay --web FILE serves the recordings to "
+              "a browser (rerun --web-viewer), and a recording can be read in Python "
+              "(README, \"Reading a recording back\")", file=sys.stderr)
+    return status
 
 
 def find_rerun() -> str | None:
@@ -344,15 +347,25 @@ def bounded(kind, low, high):
     return parse
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="rigid-gym", description=__doc__.split("\n")[0])
-    commands = parser.add_subparsers(dest="command", required=True)
+def build_parser() -> argparse.ArgumentParser:
+    """The ``rigid-gym`` command line: a subcommand per job, help on every flag."""
+    import rigid_gym
+
+    parser = argparse.ArgumentParser(
+        prog="rigid-gym", description="Robot-manipulation RL tasks (Gymnasium) on an "
+        "impulse-based rigid-body solver: run the solver's demo, record and replay episodes, "
+        "train and evaluate baselines, write offline datasets, regenerate the report. "
+        "`rigid-gym COMMAND --help` tells more.")
+    parser.add_argument("--version", action="version",
+                        version=f"rigid-gym {rigid_gym.__version__}")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     p = commands.add_parser("demo", help="run a few scenes and compare them with closed forms")
     p.add_argument("--steps", type=bounded(int, 2, 10**7), default=2400,
                    help="number of steps, 2 to 1e7 (default 2400)")
     p.add_argument("--dt", type=bounded(float, 1e-6, 0.1), default=1 / 240,
                    help="time step, s, 1e-6 to 0.1 (default 1/240)")
-    p.add_argument("--order", type=int, default=2, choices=(1, 2, 3), help="rotation order")
+    p.add_argument("--order", type=int, default=2, choices=(1, 2, 3),
+                   help="order of the rotation update, 1 to 3 (default 2)")
     p = commands.add_parser("record", help="record episodes of an env to .rrd files")
     p.add_argument("env_id", type=env_id, help="e.g. rigid_gym/Push-v0")
     p.add_argument("--policy", type=policy_spec, default="scripted",
@@ -373,6 +386,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="also record contact points and force arrows")
     p = commands.add_parser("replay", help="open .rrd recordings in the rerun viewer")
     p.add_argument("files", nargs="+", metavar="FILE", help=".rrd file(s)")
+    p.add_argument("--web", action="store_true",
+                   help="serve them to a browser with rerun's web viewer (the default where "
+                        "no display is found) instead of opening a window")
     p = commands.add_parser("train", help="train a stable-baselines3 baseline on an env")
     p.add_argument("env_id", type=env_id, help="e.g. rigid_gym/Push-v0")
     p.add_argument("--algo", choices=("sac", "tqc", "ppo", "bc_sac"), default=None,
@@ -383,13 +399,16 @@ def main(argv: list[str] | None = None) -> int:
                         "installed (ppo trains on sb3)")
     p.add_argument("--steps", type=bounded(int, 1, 10**9), default=None,
                    help="env steps, 1 to 1e9 (default: hyperparams.yml)")
-    p.add_argument("--seed", type=bounded(int, 0, 2**32 - 1), default=0)
+    p.add_argument("--seed", type=bounded(int, 0, 2**32 - 1), default=0,
+                   help="training seed, 0 to 2^32-1 (default 0): the run's folder and every "
+                        "generator derive from it")
     p.add_argument("--n-envs", type=bounded(int, 1, 1024), default=None,
                    help="envs stepped together, 1 to 1024 (default: hyperparams.yml)")
     p.add_argument("--out", default="runs", help="runs folder (default runs)")
     p.add_argument("--eval-freq", type=bounded(int, 0, 10**9), default=None,
                    help="env steps between evaluations (0: none; default: 20 over the run)")
-    p.add_argument("--eval-episodes", type=bounded(int, 1, 10**4), default=20)
+    p.add_argument("--eval-episodes", type=bounded(int, 1, 10**4), default=20,
+                   help="episodes of each evaluation during training, 1 to 1e4 (default 20)")
     p.add_argument("--final-episodes", type=bounded(int, 0, 10**5), default=100,
                    help="episodes of the final evaluation, written to the run's result.json "
                         "(0: none; default 100)")
@@ -424,7 +443,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--name", default=None, help="experiment name (default sweep-<date-time>)")
     p.add_argument("--eval-freq", type=bounded(int, 1, 10**9), default=10_000,
                    help="env steps between evaluations and checkpoints (default 10000)")
-    p.add_argument("--eval-episodes", type=bounded(int, 1, 10**4), default=20)
+    p.add_argument("--eval-episodes", type=bounded(int, 1, 10**4), default=20,
+                   help="episodes of each evaluation, 1 to 1e4 (default 20)")
     p.add_argument("--cpus-per-trial", type=bounded(float, 0.01, 1024), default=1.0,
                    help="CPUs Ray reserves per trial (default 1)")
     p.add_argument("--max-failures", type=bounded(int, 0, 100), default=0,
@@ -438,7 +458,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--env", type=env_id, default=None,
                    help="env id (default: from the model's settings: run.json in its folder, "
                         "or NAME.json beside NAME.zip)")
-    p.add_argument("--episodes", type=bounded(int, 1, 10**5), default=100)
+    p.add_argument("--episodes", type=bounded(int, 1, 10**5), default=100,
+                   help="seeded evaluation episodes, 1 to 1e5 (default 100)")
     p.add_argument("--record", metavar="DIR", default=None,
                    help="also record up to 3 episodes to DIR")
     p = commands.add_parser("report", help="regenerate the accuracy and stability report")
@@ -467,11 +488,16 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--recipes", action="store_true",
                    help="regenerate the shipped datasets rigid_gym/{push,stack,throw}/"
                         "{expert,noisy,random}-v0, replacing them")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
     args = parser.parse_args(argv)
     if args.command == "demo":
         return demo(args.steps, args.dt, args.order)
     if args.command == "replay":
-        return replay(args.files)
+        return replay(args.files, args.web)
     if args.command == "report":
         missing = [m for m in ("matplotlib", "scipy") if importlib.util.find_spec(m) is None]
         if missing:
@@ -491,8 +517,11 @@ def main(argv: list[str] | None = None) -> int:
             return dataset(args)
         return record(args.env_id, args.policy, args.algo, args.episodes, args.seed, args.out,
                       args.run, args.contacts)
-    except ValueError as exc:
+    except ValueError as exc:  # an argument: the usage says what is allowed
         parser.error(str(exc))
+    except BadFile as exc:  # the arguments were fine, a file is not: no usage
+        print(f"rigid-gym: error: {exc}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

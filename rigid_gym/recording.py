@@ -62,7 +62,9 @@ file's rows (~30 bytes per moving body and step) until the file ends.
 exception propagates), and when the process exits (an ``atexit`` hook hands over any open
 file and waits for the writer); a process killed outright, or stopped by Ctrl-C, loses only
 the rows it had not handed over (a writer killed outright loses the files it had not
-finished; Ctrl-C does not reach it). Files of finished episodes are written in the
+finished; Ctrl-C does not reach it). On Ctrl-C the process exits at once, without waiting:
+the writer completes the files in the background (and says so on standard error, with its
+process id), however busy the machine. Files of finished episodes are written in the
 background: ``sync()`` waits for them. A file the writer cannot write (an unwritable folder,
 a name too long) is reported by its own recorder: ``sync()`` and ``close()`` raise its
 OSError, naming the file; the other files, and later ones, are written. Nothing is made
@@ -161,8 +163,8 @@ class RecordRerun(gym.Wrapper):
             if self._recording is not None:
                 self._step += 1
                 self._recording.record(self._step, self.recordable.scalars(action, reward, info))
-        except BaseException:
-            self._end_episode(wait=True)
+        except BaseException as error:
+            self._end_episode(wait=not isinstance(error, KeyboardInterrupt))
             raise
         if terminated or truncated:
             self._end_episode()
@@ -197,8 +199,8 @@ class RecordRerun(gym.Wrapper):
         try:
             recording.send("markers", [_marker_row(marker) for marker in task.markers()])
             recording.record(0)
-        except BaseException:
-            self._end_episode(wait=True)
+        except BaseException as error:
+            self._end_episode(wait=not isinstance(error, KeyboardInterrupt))
             raise
 
     def _scene_layout(self, files: Writer) -> int:
@@ -392,6 +394,8 @@ class _Recording:
         if not self.closed:
             self.closed = True
             atexit.unregister(self.close)
+            if self.files.torn:  # Ctrl-C cut a message short: the writer completes the file
+                return           # from what it has, and nothing more can be sent
             try:
                 self._send_rows()
             finally:

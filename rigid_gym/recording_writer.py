@@ -42,7 +42,9 @@ Errors no sync collected are printed on the shared standard error as the writer 
 The writer runs at a lower priority (``NICENESS``) in a process group of its own, so Ctrl-C,
 which a terminal sends to the foreground process group, never reaches it, not even while it
 is still importing (~1 s after the first file); it finishes the files it was given when its
-client stops it or dies.
+client stops it or dies. A client ending on Ctrl-C does not wait for that (``Writer.stop``):
+it exits at once and says so, and the writer completes the files in the background. A write
+that Ctrl-C cut short leaves part of a message, the last the writer reads.
 """
 
 from __future__ import annotations
@@ -114,6 +116,9 @@ class Writer:
         self.pending: list[tuple] = []
         self.failures: dict[str, tuple] = {}
         self.stopped = False
+        self.torn = False
+        """Whether a write to the pipe was cut short (Ctrl-C while ``flush`` wrote): the
+        writer then holds part of a message, after which nothing more may be sent."""
         atexit.register(self.stop)
 
     def layout(self, scene: Scene, application_id: str, blueprint: tuple) -> int:
@@ -134,11 +139,17 @@ class Writer:
         """Hand the held messages over now; waits only while the pipe is full (the writer is
         behind by ``PIPE_BYTES``, or 64 KiB where the pipe could not be widened)."""
         batch, self.pending = self.pending, []
+        data = pickle.dumps(batch, protocol=pickle.HIGHEST_PROTOCOL)
+        if self.torn:
+            raise RuntimeError("the pipe to the rerun writer holds part of a message (a write "
+                               "was interrupted); nothing more can be sent to it")
+        self.torn = True
         try:
-            self.input.write(pickle.dumps(batch, protocol=pickle.HIGHEST_PROTOCOL))
+            self.input.write(data)
             self.input.flush()
         except (BrokenPipeError, ValueError) as error:  # ValueError: the pipe was closed
             raise RuntimeError(self._ended()) from error
+        self.torn = False
 
     def sync(self, paths=frozenset()) -> None:
         """Wait until every file sent so far is written, then raise the writer's error for
@@ -156,19 +167,34 @@ class Writer:
         if failed is not None:
             raise _failure_error(failed, *self.failures.pop(failed))
 
-    def stop(self) -> None:
-        """Let the writer complete every file and exit; wait for it (idempotent). Errors that
-        no recorder raised are printed on standard error."""
+    def stop(self, wait: bool | None = None) -> None:
+        """Let the writer complete every file and exit (idempotent); ``wait`` for it (by
+        default, unless this process is ending on Ctrl-C). Errors that no recorder raised are
+        printed on standard error.
+
+        Ctrl-C (an uncaught KeyboardInterrupt, as this runs at exit) does not wait: the writer,
+        which Ctrl-C does not reach, completes the files it was handed on its own once its
+        input ends, while this process exits at once. A writer at its lower priority behind
+        busy cores can take many seconds to get there (importing rerun comes first),
+        and a Ctrl-C should stop the process now."""
         atexit.unregister(self.stop)
         if os.getpid() != self.owner:  # a forked child's copy: the parent's writer
             return
+        if wait is None:
+            wait = not isinstance(getattr(sys, "last_value", None), KeyboardInterrupt)
         self.stopped = True
         if self.process.poll() is None:
             try:
-                self.send("stop", flush=True)
+                if not self.torn:  # else the writer reads part of a message, then the end
+                    self.send("stop", flush=True)
                 self.input.close()
-            except RuntimeError:
+            except (RuntimeError, OSError):
                 pass  # it ended already: its error is on standard error
+        if not wait and self.process.poll() is None:
+            print(f"rigid_gym.recording_writer: interrupted; the writer process (pid "
+                  f"{self.process.pid}) completes the files it was handed in the background",
+                  file=sys.stderr, flush=True)
+            return
         self.process.wait()
         for pipe in (self.input, self.output):
             try:
@@ -303,6 +329,11 @@ def _messages(source):
         try:
             batch = pickle.load(source)
         except EOFError:
+            return
+        except pickle.UnpicklingError:  # the last one cut short: its client was interrupted
+            print("rigid_gym.recording_writer: the last message was cut short (its client was "
+                  "interrupted while sending it); the files before it are completed",
+                  file=sys.stderr, flush=True)
             return
         yield from batch
 

@@ -11,11 +11,13 @@ that owns every buffer the step uses); ``World.state`` and ``World.model`` are n
 them. ``World.model`` and the arrays returned by properties are read-only views: change them
 with the setters (``set_material`` for masses and materials), which validate their input
 before anything reaches the core and wake the bodies they change (a sleeping body's step is
-skipped on the grounds that nothing about it changed).
+skipped on the grounds that nothing about it changed). ``save_state``/``restore_state``,
+``copy.deepcopy`` and ``pickle`` snapshot a World (``rigid_gym.snapshots``).
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 from typing import NamedTuple
 
@@ -31,6 +33,7 @@ from rigid_gym.geometry import compile_geometry, max_pair_contacts
 from rigid_gym.joints import FIXED, REVOLUTE, joint_model, joint_settings, limits_of
 from rigid_gym.scene import Scene
 from rigid_gym.shapes import Compound, Mesh
+from rigid_gym.snapshots import SavedStates
 
 
 class State(NamedTuple):
@@ -126,21 +129,15 @@ class World:
         self.geometry = compile_geometry(scene.bodies, self.config.box_edge_segments)
         motion = np.array([b.motion for b in scene.bodies], dtype=np.int32)
         sweep = uses_sweep(self.geometry.body_unbounded, self.config.sweep)
-        self.core = _core.Batch(self.num_worlds, self.geometry._asdict(), motion,
-                                tuple(scene.gravity.tolist()), self.config.settings(sweep),
-                                max_pair_contacts(self.geometry))
+        self._bind(_core.Batch(self.num_worlds, self.geometry._asdict(), motion,
+                               tuple(scene.gravity.tolist()), self.config.settings(sweep),
+                               max_pair_contacts(self.geometry)))
         if scene.joints:
             if self.config.joint_passes == 0:
                 raise ValueError("World: the scene has joints but config.joint_passes is 0 "
                                  "(the joint stages off); give joint_passes >= 1")
             self.core.set_joints(*joint_model(scene.joints))
             self._load_joint_settings(scene, slice(None))
-        c = self.core
-        self.state = State(**{name: getattr(c, name) for name in _core.STATE})
-        self.model = Model(motion, *self._materials(), scene.gravity.copy())
-        for array in self.model:  # read-only through this name; set_material writes the core's
-            array.flags.writeable = False
-        self.attached = Attachments(*(getattr(c, name) for name in _core.ATTACHMENTS))
         for current, new in zip(self._materials(), _build_model(scene, self.num_worlds)[1:5]):
             current[...] = new
         for current, new in zip(self.state, _build_state(scene, self.num_worlds)):
@@ -149,6 +146,84 @@ class World:
         self._initial_state = tuple(a.copy() for a in self.state)
         self.steps = 0
         self.profiling = profile
+        self.saved: SavedStates[tuple[_core.Batch, int]] = SavedStates("World")
+        """The states kept by ``save_state``: (a copy of the core, the step count) by id."""
+
+    def _bind(self, core: _core.Batch) -> None:
+        """Own ``core`` and name its arrays: ``state``, ``model`` (read-only views) and
+        ``attached``."""
+        self.core = c = core
+        self.state = State(**{name: getattr(c, name) for name in _core.STATE})
+        self.model = Model(np.array([b.motion for b in self.scene.bodies], dtype=np.int32),
+                           *self._materials(), self.scene.gravity.copy())
+        for array in self.model:  # read-only through this name; set_material writes the core's
+            array.flags.writeable = False
+        self.attached = Attachments(*(getattr(c, name) for name in _core.ATTACHMENTS))
+
+    # -- snapshots ---------------------------------------------------------------------------
+
+    def save_state(self) -> int:
+        """Keep a copy of everything that decides the next steps (every world's state, model
+        and attachments, the time, and what the solver carries from step to step: sleeping's
+        bookkeeping, the broad phase's order) and return its id (an int), as PyBullet's
+        ``saveState`` (panda-gym's ``sim.save_state``) does."""
+        return self.saved.save((self.core.copy(), self.steps))
+
+    def restore_state(self, state_id: int) -> None:
+        """Put the World back, in place, to the state saved as ``state_id`` (``save_state``),
+        which stays saved: from there every world steps on bit for bit as it did then. Arrays
+        read from this World before (``state``, ``position``, ...) stay its views."""
+        core, steps = self.saved.get(state_id, "restore_state")
+        self.core.assign(core)
+        self.steps = steps
+
+    def remove_state(self, state_id: int) -> None:
+        """Forget the state saved as ``state_id``, freeing its memory."""
+        self.saved.remove(state_id)
+
+    def __deepcopy__(self, memo: dict) -> World:
+        """An independent World in the same state as this one, saved states included, that
+        steps on bit for bit as this one does (the core's every buffer is copied)."""
+        copied = object.__new__(World)
+        memo[id(self)] = copied
+        for name, value in self.__dict__.items():
+            if name not in ("core", "state", "model", "attached", "saved"):
+                copied.__dict__[name] = copy.deepcopy(value, memo)
+        copied._bind(self.core.copy())
+        copied.saved = copy.copy(self.saved)
+        copied.saved.states = {k: (core.copy(), steps)
+                               for k, (core, steps) in self.saved.states.items()}
+        return copied
+
+    def __getstate__(self) -> dict:
+        """What pickle stores: the arguments that build this World again and the arrays of its
+        state, model and attachments (and of each saved state). A new core starts with no
+        sleeping bookkeeping, which changes nothing when ``sleep_speed`` is 0 (sleeping is
+        then exact: ``src/solver/sleep.h``); with ``sleep_speed`` > 0 the bodies' slow time
+        lives in the core only, so such a World refuses to be pickled (copy.deepcopy and
+        save_state keep it). The step and stage counts of ``profile()`` start again at 0."""
+        if self.config.sleep and self.config.sleep_speed > 0.0:
+            raise ValueError("World: a World with SolverConfig.sleep_speed > 0 cannot be "
+                             "pickled (the time each body has moved slowly lives in the core); "
+                             "use copy.deepcopy or World.save_state within the process")
+        built = {"scene": self.scene, "dt": self.dt,
+                 "num_worlds": self.num_worlds if self.batched else None,
+                 "config": None if self._config_from_scene else self.config,
+                 "profile": self.profiling}
+        return {"built": built, "steps": self.steps, "arrays": _core_arrays(self.core),
+                "saved": {k: (_core_arrays(core), steps)
+                          for k, (core, steps) in self.saved.states.items()},
+                "next_state_id": self.saved.next_id}
+
+    def __setstate__(self, state: dict) -> None:
+        World.__init__(self, **state["built"])
+        _write_core_arrays(self.core, state["arrays"])
+        self.steps = state["steps"]
+        for k, (arrays, steps) in state["saved"].items():
+            core = self.core.copy()
+            _write_core_arrays(core, arrays)
+            self.saved.states[k] = (core, steps)
+        self.saved.next_id = state["next_state_id"]
 
     # -- stepping ----------------------------------------------------------------------------
 
@@ -678,6 +753,24 @@ class WorldView:
 
     def detach(self, body) -> None:
         self.batch.detach(body, world=self.index)
+
+
+CORE_ARRAYS = ("position", "orientation", "velocity", "angular_momentum", "angular_velocity",
+               "rotation", "force", "torque", "inverse_mass", "inverse_moments", "friction",
+               "restitution", "attach_parent", "attach_offset_position",
+               "attach_offset_orientation", "joint_lower", "joint_upper", "joint_motor_speed",
+               "joint_max_motor")
+"""The core's arrays that Python sees (``World.state``, its materials, ``World.attached``):
+with the scene, the config and the time they are all a pickled World keeps."""
+
+
+def _core_arrays(core: _core.Batch) -> dict[str, np.ndarray]:
+    return {name: getattr(core, name).copy() for name in CORE_ARRAYS}
+
+
+def _write_core_arrays(core: _core.Batch, arrays: dict[str, np.ndarray]) -> None:
+    for name in CORE_ARRAYS:
+        getattr(core, name)[...] = arrays[name]
 
 
 def _same_shape(a, b) -> bool:

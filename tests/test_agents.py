@@ -21,6 +21,8 @@ from rigid_gym.agents.train import (
 )
 from rigid_gym.envs.scripted import scripted_policy
 
+from rigid_gym.checks import BadFile
+
 COMMITTED = Path(__file__).resolve().parent.parent / "agents" / "models"
 
 
@@ -113,7 +115,7 @@ def test_bad_arguments_are_refused(tmp_path):
         train("rigid_gym/Push-v0", timesteps=0, out=tmp_path)
     with pytest.raises(ValueError, match="ppo has none"):
         train("rigid_gym/PushDense-v0", demonstrations=1, out=tmp_path)
-    with pytest.raises(ValueError, match="no model file"):
+    with pytest.raises(BadFile, match="model file .*missing.zip not found"):
         evaluate(tmp_path / "missing.zip", env_id="rigid_gym/Push-v0")
 
 

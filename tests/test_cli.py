@@ -1,6 +1,7 @@
 """The rigid-gym command."""
 
 import re
+import sys
 
 import pytest
 from rigid_gym.agents.train import load_hyperparams
@@ -94,7 +95,6 @@ def test_record_a_stable_baselines3_model_reads_its_algorithm_from_the_zip(algor
     (["record", "rigid_gym/Push-v0", "--policy", "greedy"],
      "expected random, scripted or a model .zip, got 'greedy'"),
     (["record", "rigid_gym/Push-v0", "--episodes", "0"], "must be in [1, 10000], got 0"),
-    (["record", "rigid_gym/Push-v0", "--policy", "missing.zip"], "no model file at missing.zip"),
     (["record", "rigid_gym/Push-v0", "--run", "a/b"], "RecordRerun.run: must be a non-empty"),
 ])
 def test_bad_record_arguments_fail_clearly(args, message, usage_error):
@@ -121,6 +121,7 @@ def test_replay_runs_the_viewer_installed_with_this_python(tmp_path, monkeypatch
     fake.write_text(f"#!/bin/sh\necho \"$@\" > {log}\n")
     fake.chmod(0o755)
     monkeypatch.setattr(cli, "find_rerun", lambda: str(fake))
+    monkeypatch.setenv("DISPLAY", ":0")  # a window can open
     episode = tmp_path / "episode.rrd"
     episode.write_bytes(b"")  # not a rerun file: opened alone
     assert main(["replay", str(episode)]) == 0
@@ -132,6 +133,31 @@ def test_replay_runs_the_viewer_installed_with_this_python(tmp_path, monkeypatch
     episodes = [str(folder / f"r-episode-{k}.rrd") for k in range(2)]
     assert main(["replay", *episodes]) == 0
     assert log.read_text().split() == [*episodes, str(folder / "rigid_gym-Throw-v0.rbl")]
+
+
+def test_replay_without_a_display_serves_the_web_viewer(tmp_path, monkeypatch, capsys):
+    """Where no window can open (Linux without DISPLAY and WAYLAND_DISPLAY), replay serves
+    the files with rerun's web viewer and says so; --web asks for it anywhere; a native
+    viewer that fails points to it."""
+    from rigid_gym import cli
+
+    fake, log = tmp_path / "rerun", tmp_path / "args.txt"
+    fake.write_text(f"#!/bin/sh\necho \"$@\" > {log}\n[ \"$1\" = --web-viewer ]\n")
+    fake.chmod(0o755)
+    monkeypatch.setattr(cli, "find_rerun", lambda: str(fake))
+    monkeypatch.setattr(sys, "platform", "linux")
+    episode = tmp_path / "episode.rrd"
+    episode.write_bytes(b"")
+    monkeypatch.delenv("DISPLAY", raising=False)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    assert main(["replay", str(episode)]) == 0
+    assert log.read_text().split() == ["--web-viewer", str(episode)]
+    assert "no display" in capsys.readouterr().err
+    monkeypatch.setenv("DISPLAY", ":0")
+    assert main(["replay", "--web", str(episode)]) == 0
+    assert log.read_text().split() == ["--web-viewer", str(episode)]
+    assert main(["replay", str(episode)]) == 1  # the stand-in fails without --web-viewer
+    assert "rigid-gym replay --web FILE" in capsys.readouterr().err
 
 
 def test_replay_explains_a_missing_file_or_viewer(tmp_path, monkeypatch, capsys):
@@ -213,7 +239,47 @@ def test_a_new_run_in_a_used_folder_chooses_only_among_its_own_checkpoints(tmp_p
     (["sweep", "rigid_gym/Push-v0", "--seeds", "0", "--param", "tau"], "--param must be KEY="),
     (["train", "rigid_gym/Push-v0", "--algo", "dqn"], "invalid choice: 'dqn'"),
     (["train", "rigid_gym/Push-v0", "--steps", "0"], "must be in [1, 1000000000], got 0"),
-    (["evaluate", "missing.zip", "--env", "rigid_gym/Push-v0"], "no model file at missing.zip"),
 ])
 def test_bad_train_and_evaluate_arguments_fail_clearly(args, message, usage_error):
     assert message in usage_error(args)
+
+
+def test_a_missing_or_corrupt_model_is_named_without_usage(tmp_path, capsys):
+    """A file that is not there, or not a model zip: exit 1 with the file named, no usage
+    banner (the arguments were fine) and no traceback."""
+    corrupt = tmp_path / "corrupt.zip"
+    corrupt.write_bytes(b"PK\x03\x04 not really a zip")
+    (tmp_path / "corrupt.json").write_text('{"env_id": "rigid_gym/Push-v0"}')
+    cases = [(["evaluate", "nope.zip"], "model file nope.zip not found"),
+             (["evaluate", "nope.zip", "--env", "rigid_gym/Push-v0"],
+              "model file nope.zip not found"),
+             (["record", "rigid_gym/Push-v0", "--policy", "nope.zip", "--out", str(tmp_path)],
+              "model file nope.zip not found"),
+             (["evaluate", str(corrupt)], f"{corrupt} is not a stable-baselines3 model zip")]
+    for args, message in cases:
+        assert main(args) == 1
+        err = capsys.readouterr().err
+        assert message in err and "usage" not in err and "Traceback" not in err, err
+        assert "pass the algorithm" not in err
+
+
+def test_version_and_help_on_every_flag(capsys):
+    """--version prints the package's version; every flag of every command has help; no
+    help shows reStructuredText markup."""
+    import argparse
+
+    import rigid_gym
+    from rigid_gym.cli import build_parser
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--version"])
+    assert exit_info.value.code == 0
+    assert capsys.readouterr().out.strip() == f"rigid-gym {rigid_gym.__version__}"
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    texts = [parser.format_help()]
+    for name, command in commands.choices.items():
+        texts.append(command.format_help())
+        for action in command._actions:
+            assert action.help, f"rigid-gym {name} {action.option_strings or action.dest}"
+    assert not any("``" in text for text in texts)

@@ -167,6 +167,48 @@ def test_bad_dataset_arguments_fail_clearly(args, message, usage_error):
     assert message in usage_error(args)
 
 
+@pytest.mark.parametrize("dataset_id", ["push", "t/push-v0", "rigid_gym/push/expert"])
+def test_a_bad_dataset_id_fails_before_playing_and_leaves_nothing(dataset_id, usage_error,
+                                                                   datasets_path, monkeypatch):
+    played = []
+    monkeypatch.setattr(datasets, "play", lambda *a, **k: played.append(1))
+    assert f"{dataset_id!r} is not a dataset id" in usage_error(
+        ["dataset", "rigid_gym/Push-v0", "--episodes", "1", "--dataset-id", dataset_id])
+    assert not played and not any(datasets_path.iterdir())
+
+
+def test_a_failed_write_leaves_nothing(datasets_path, monkeypatch):
+    def fail(*args, **kwargs):
+        (datasets_path / "rigid_gym" / "push" / "a-v0" / "data").mkdir(parents=True)
+        raise OSError("disk full")
+
+    monkeypatch.setattr(minari, "create_dataset_from_buffers", fail)
+    with pytest.raises(OSError, match="disk full"):
+        datasets.write_dataset("rigid_gym/push/a-v0", "rigid_gym/Push-v0", "scripted", 1)
+    assert not any(datasets_path.iterdir())
+
+
+@pytest.mark.parametrize("damage, named", [
+    (lambda data: __import__("shutil").rmtree(data / "1"), "episode 1's folder {data}/1 is missing"),
+    (lambda data: (data / "1" / "part-0.arrow").write_bytes(
+        (data / "1" / "part-0.arrow").read_bytes()[:-40]), "{data}/1/part-0.arrow is not a whole"),
+    (lambda data: (data / "metadata.json").write_text("garbage{"),
+     "{data}/metadata.json is not readable JSON"),
+    (lambda data: (data / "0" / "metadata.json").unlink(), "{data}/0/metadata.json is missing"),
+], ids=["no-episode-folder", "truncated-arrow", "garbage-metadata", "no-episode-metadata"])
+def test_verify_names_the_damaged_file_without_a_traceback(damage, named, datasets_path,
+                                                           capsys):
+    assert main(["dataset", "rigid_gym/Push-v0", "--episodes", "2", "--dataset-id",
+                 "rigid_gym/push/a-v0"]) == 0
+    data = datasets_path / "rigid_gym" / "push" / "a-v0" / "data"
+    damage(data)
+    capsys.readouterr()
+    assert main(["dataset", "--verify", "rigid_gym/push/a-v0"]) == 1
+    err = capsys.readouterr().err
+    assert named.format(data=data) in err and "Traceback" not in err and "usage" not in err
+    assert "write it again, or delete it (minari delete rigid_gym/push/a-v0)" in err
+
+
 def test_an_existing_dataset_is_not_overwritten(usage_error):
     args = ["dataset", "rigid_gym/Push-v0", "--episodes", "1", "--dataset-id", "rigid_gym/push/a-v0"]
     assert main(args) == 0

@@ -378,7 +378,7 @@ def test_stepping_before_reset_is_refused():
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    ({"colour": "red"}, "unexpected keyword"),
+    ({"colour": "red"}, r"unknown argument\(s\) \[.colour.\]; the arguments are render_mode"),
     ({"reward_type": "staged"}, "reward_type must be"),
     ({"render_mode": "ansi"}, "render_mode must be"),
     ({"observation_noise": -0.1}, "observation_noise: must be finite and >= 0, got -0.1"),

@@ -1,6 +1,8 @@
 """Joints (src/solver/joints.h, rigid_gym/joints.py): input checks, closed forms, limits,
 motors, collisions and sleeping of joined bodies, determinism."""
 
+import copy
+import pickle
 import subprocess
 import sys
 
@@ -299,6 +301,31 @@ def test_load_takes_a_scene_of_the_same_joints_with_other_motors():
     other.add_revolute_joint(0, None, (0, 0, 0), (0, 0, 1))
     with pytest.raises(ValueError, match="joints differ"):
         world.load(other)
+
+
+def test_snapshots_keep_the_joints_motors_and_limits():
+    """save_state, copy.deepcopy and pickle of a jointed World step on bit for bit, with the
+    motor and limits set after it was made (which its scene does not hold)."""
+    world = rg.World(scenes.hanging_chain(0.5), dt=DT)
+    world.set_joint_motor(0, speed=0.5, max_motor=0.02)
+    world.set_joint_limits(3, (-0.2, 0.2))
+    world.step(30)
+    state_id = world.save_state()
+
+    def trace(w: rg.World) -> bytes:
+        out = []
+        for _ in range(60):
+            w.step()
+            out.extend(a.tobytes() for a in w.state)
+        return b"".join(out)
+
+    twin, loaded = copy.deepcopy(world), pickle.loads(pickle.dumps(world))
+    first = trace(world)
+    world.set_joint_motor(0, max_motor=0.0)
+    world.restore_state(state_id)
+    assert trace(world) == first
+    assert trace(twin) == first
+    assert trace(loaded) == first
 
 
 def two_components(with_pair: bool) -> rg.Scene:

@@ -76,3 +76,27 @@ def test_one_version_in_pyproject_the_changelog_and_the_package():
                 if line.startswith("## ")]
     assert headings[0].split()[1] == project["version"], headings[0]
     assert rigid_gym.__version__ == project["version"], "reinstall: pip install -e ."
+
+
+def test_layout_agents_import_no_cli_and_the_library_no_ray():
+    """The CLI imports agents/ (policies, datasets), so no module of agents/ imports the CLI
+    (an import circle); Ray code lives in agents/ (sweep, rllib), none in rigid_gym/."""
+    root = Path(__file__).resolve().parents[1]
+    for path in (root / "agents").glob("*.py"):
+        imported = _imports(path)
+        assert not any(m.startswith("rigid_gym.cli") for m in imported), path
+    for path in (root / "rigid_gym").rglob("*.py"):
+        imported = _imports(path)
+        assert not any(m == "ray" or m.startswith("ray.") for m in imported), path
+
+
+def _imports(path: Path) -> set[str]:
+    """The modules ``path`` imports (absolute names; relative ones as written)."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module:
+            names.add(node.module)
+            names.update(f"{node.module}.{alias.name}" for alias in node.names)
+    return names

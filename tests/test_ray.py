@@ -1,4 +1,4 @@
-"""Ray: the RLlib recipe (rigid_gym.rllib) and sweeps of training runs as Tune trials
+"""Ray: the RLlib recipe (rigid_gym.agents.rllib) and sweeps of training runs as Tune trials
 (rigid_gym.agents.sweep), each on a local Ray cluster of 2 CPUs. Skipped without Ray (the
 ``ray`` extra)."""
 
@@ -16,9 +16,8 @@ import ray
 
 
 def test_rllib_trains_ppo_on_a_task_by_its_id():
+    import rigid_gym.agents.rllib  # noqa: F401  (registers the ids with RLlib)
     from ray.rllib.algorithms.ppo import PPOConfig
-
-    import rigid_gym.rllib  # noqa: F401  (registers the ids with RLlib)
 
     ray.init(address="local", num_cpus=2, include_dashboard=False)  # not a `ray start` one
     try:

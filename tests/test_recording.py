@@ -4,12 +4,14 @@ workers, a file that cannot be written fails alone, and bad input fails."""
 
 import errno
 import os
+import re
 import shutil
 import signal
 import subprocess
 import sys
 import textwrap
 import time
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -411,33 +413,58 @@ def test_a_process_killed_outright_still_gets_its_finished_episodes_written(tmp_
         assert step.tolist() == [0, 1, 2, 3]
 
 
-def test_ctrl_c_right_after_the_first_recorded_reset_loses_no_finished_episode(tmp_path):
-    """SIGINT to the whole process group, as a terminal sends Ctrl-C, 0.1 s after the first
-    recorded reset, while the writer process is still importing: it does not reach the
-    writer, and every episode the env finished is written when the env's process has
-    exited."""
+def interrupted_recording(folder, delay: float, episode_steps: int = 3) -> tuple[list, float]:
+    """A process that records Throw episodes to ``folder`` endlessly, sent SIGINT on its
+    whole process group (as a terminal sends Ctrl-C) ``delay`` s after its first recorded
+    reset. Returns the files of the episodes it finished, once the writer has completed
+    them, and the seconds the process took to exit after the signal.
+
+    The process starts with SIGINT's default disposition, as a terminal's foreground job
+    has: a process started in the background of a non-interactive shell (``pytest &`` in a
+    script) inherits SIGINT ignored, and Python then never raises KeyboardInterrupt."""
     script = textwrap.dedent(f"""
+        import signal
+        signal.signal(signal.SIGINT, signal.default_int_handler)  # a foreground job's
         import gymnasium as gym
         import rigid_gym
         from rigid_gym.recording import RecordRerun
-        env = RecordRerun(gym.make("rigid_gym/Throw-v0", max_episode_steps=3),
-                          {str(tmp_path)!r}, episode_trigger=lambda k: True, run="interrupted")
+        env = RecordRerun(gym.make("rigid_gym/Throw-v0", max_episode_steps={episode_steps}),
+                          {str(folder)!r}, episode_trigger=lambda k: True, run="interrupted")
         env.reset(seed=0)
         print("reset", flush=True)
         while True:
-            for _ in range(3):
+            for _ in range({episode_steps}):
                 env.step(env.action_space.sample())
             print(env.paths[-1], flush=True)  # finished
             env.reset()
     """)
-    process = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE,
-                               text=True, start_new_session=True)  # a group of its own
+    process = subprocess.Popen(
+        [sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True, start_new_session=True)  # a group of its own
     assert process.stdout.readline() == "reset\n"
-    time.sleep(0.1)
+    time.sleep(delay)
     os.killpg(process.pid, signal.SIGINT)
-    finished = process.communicate(timeout=120)[0].split()
-    assert process.returncode != 0  # interrupted
-    assert finished
+    sent = time.perf_counter()
+    finished, errors = process.communicate(timeout=120)
+    took = time.perf_counter() - sent
+    assert process.returncode == -signal.SIGINT, errors  # ended by the KeyboardInterrupt
+    found = re.search(r"writer process \(pid (\d+)\) completes", errors)
+    if found:  # the writer completes the files after the process has exited
+        pid = int(found.group(1))
+        while os.path.exists(f"/proc/{pid}") and "zombie" not in Path(
+                f"/proc/{pid}/status").read_text(errors="replace"):
+            time.sleep(0.05)
+    return finished.split(), took
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.parametrize("delay", [0.0, 0.1])
+def test_ctrl_c_after_the_first_recorded_reset_loses_no_finished_episode(tmp_path, delay):
+    """SIGINT while the writer process is still importing (0 and 0.1 s after the reset): it does
+    not reach the writer, the process exits without waiting for it, and every episode the
+    env finished is written once the writer has ended."""
+    finished, _ = interrupted_recording(tmp_path, delay)
+    assert finished or delay == 0.0
     for path in finished:
         assert verified(path), path
 

@@ -3,6 +3,9 @@
 #include <nanobind/stl/optional.h>
 #include <nanobind/stl/tuple.h>
 
+#include <algorithm>
+#include <iterator>
+#include <stdexcept>
 #include <string>
 
 #include "bindings/arrays.h"
@@ -440,6 +443,31 @@ void bind_world(nb::module_& m) {
         },
         "Contacts at the current poses of worlds [first, last) (src/solver/queries.h): world, body_a, "
         "body_b (k,), point, normal (k, 3), depth (k,).");
+    // Snapshots (World.save_state, copy.deepcopy): every buffer, the step's carried-over
+    // bookkeeping (sleeping, the contact pools' limits, the broad phase's order) included, so
+    // a copy steps on bit for bit as the original does.
+    cls.def("copy", [](const Batch& c) { return Batch(c); },
+            "A new batch holding a copy of every buffer of this one.");
+    cls.def(
+        "assign",
+        [](Batch& c, const Batch& from) {
+            if (from.num_worlds() != c.num_worlds() || from.num_bodies() != c.num_bodies()) {
+                throw nb::value_error("Batch.assign: another batch or scene");
+            }
+            // Python holds numpy views of the state, the model and the attachments: copying
+            // equal-sized vectors reuses their storage, checked here
+            const void* before[] = {c.position.data(), c.orientation.data(), c.rotation.data(),
+                                    c.inverse_mass.data(), c.attach_parent.data()};
+            c = from;
+            const void* after[] = {c.position.data(), c.orientation.data(), c.rotation.data(),
+                                   c.inverse_mass.data(), c.attach_parent.data()};
+            if (!std::equal(std::begin(before), std::end(before), std::begin(after))) {
+                throw std::runtime_error("Batch.assign: the state moved in memory");
+            }
+        },
+        nb::arg("source"),
+        "Make every buffer of this batch a copy of `source`'s (a batch of the same scene "
+        "and batch, e.g. from copy()), in place: numpy views of this one stay valid.");
     nb::class_<BatchSharing>(m, "BatchSharing",
                              "The choice between stepping a batch on the calling thread and "
                              "sharing it out over the pool, as each Batch makes it from "

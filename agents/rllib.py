@@ -1,7 +1,7 @@
 """Ray RLlib on the rigid_gym tasks: importing this module registers every id with RLlib.
 
     from ray.rllib.algorithms.ppo import PPOConfig
-    import rigid_gym.rllib                    # registers rigid_gym/Push-v0 ... with RLlib
+    import rigid_gym.agents.rllib             # registers rigid_gym/Push-v0 ... with RLlib
 
     config = PPOConfig().environment("rigid_gym/PushDense-v0").env_runners(num_env_runners=2)
     algo = config.build_algo()
@@ -24,7 +24,7 @@ import functools
 import gymnasium as gym
 from ray.tune.registry import register_env
 
-from rigid_gym.envs import ENV_IDS
+from ..envs import ENV_IDS
 
 
 def make_env(env_id: str, env_config: dict) -> gym.Env:
