@@ -46,11 +46,11 @@ STIFF_TITLES = (r"10-cube tower, [\d.]+ s", r"20-cube tower, [\d.]+ s", r"40-cub
                 r"cube dropped 1 m, alone and onto a cube, .*",
                 r"masses 1e-3 to 1e3 kg, two towers, .*",
                 r"sleeping: exact on a stack, stopping slow islands on a pyramid",
-                r"pile of \d+ bodies, .*")
+                r"pile of \d+ bodies, .*", r"10-link chain, released at .*")
 
 
 def test_every_stiff_case_reports_pass_or_fail_with_its_numbers(quick_report):
-    """Each of the 17 stiff cases has exactly one first row with its verdict, and no other
+    """Each of the 18 stiff cases has exactly one first row with its verdict, and no other
     case has one; each failure is listed with its cause and bound."""
     text = (quick_report / "report.md").read_text()
     rows = [line for line in text.splitlines() if "| PASS |" in line or "| **FAIL** |" in line]
@@ -58,8 +58,8 @@ def test_every_stiff_case_reports_pass_or_fail_with_its_numbers(quick_report):
     for pattern in STIFF_TITLES:
         matching = [title for title in titles if re.fullmatch(pattern, title)]
         assert len(matching) == 1, f"stiff case {pattern!r}: rows {matching}"
-    assert len(titles) == len(STIFF_TITLES) == 17, titles
-    assert f"{len(titles) - sum('**FAIL**' in row for row in rows)} of 17 cases pass" in text
+    assert len(titles) == len(STIFF_TITLES) == 18, titles
+    assert f"{len(titles) - sum('**FAIL**' in row for row in rows)} of 18 cases pass" in text
     failures = [line for line in text.splitlines() if line.startswith("- **")]
     assert len(failures) == sum("| **FAIL** |" in row for row in rows)
     assert all("Cause:" in line and "(bound" in line for line in failures)
