@@ -25,12 +25,13 @@ STEP_TIME = 0.04
 """s of simulated time per env step."""
 SOLVER_STEPS = 10
 """solver steps per env step (dt = 4 ms, as panda-gym's 2 ms x 20 and Fetch's 2 ms x 20)."""
-SOLVER_SETTINGS = {"overlap_correction": 0.2}
+SOLVER_SETTINGS = {"overlap_correction": 0.2, "contact_patches": False, "patch_reactions": False}
 """SolverConfig fields where the v0 tasks differ from the library's defaults. An env id's
 dynamics are fixed with its version (Gymnasium's rule): the v0 ids' results, models and
-datasets were made removing 20% of an excess overlap per step; the library's default removes
-all of it, which changes Throw's and Stack's episodes in their bits. A v1 of a task would
-take the defaults."""
+datasets were made removing 20% of an excess overlap per step, resolving patches between two
+cubes by one impulse and without shock propagation's friction reactions; the library's
+defaults change Throw's and Stack's episodes in their bits. A v1 of a task would take the
+defaults."""
 DISTANCE_THRESHOLD = 0.05
 """m: a goal position is reached within this distance."""
 CUBE_HALF = 0.02

@@ -63,6 +63,18 @@ class SolverConfig:
         the excess within the step that made it: overlap the velocity-level phases cannot
         see (the corner of a fast-turning box sweeping into a neighbour and out of it again
         within the step, separating at the predicted pose) is gone before anyone looks.
+    contact_patches: in the contact and shock phases, a face or edge patch between two movable
+        bodies gets the patch wrench of ``src/solver/patch.h`` (brought exactly to rest or to
+        sliding without rocking) as a patch against an immovable one does; off, one impulse at
+        the approaching points' centroid, which leaves a light body on a far heavier one
+        rocking (a 1 mm cube on a 1 m cube, mass ratio 1e9, moved at 1.5e-5 m/s after 1 s at
+        dt = 1/60).
+    patch_reactions: shock propagation books each patch's impulse to the pairs behind it by
+        the lever rule (``World.contacts`` then reports each support's reaction; off, the
+        whole patch's impulse goes to one pair), and passes the friction it applies against a
+        dynamic support on to that support as its reaction, then resolves the levels again
+        (off, that reaction is lost: a block pulled under another on a frictionless floor
+        gained 1.2% momentum beyond F T).
     detect_every_pass: run the narrow phase again at the predicted poses in every pass of
         every impulse phase (the original GBF formulation) instead of finding each pair's
         contacts once per step and carrying their separations through the passes
@@ -80,6 +92,8 @@ class SolverConfig:
     detect_every_pass: bool = False
     keep_energy: bool = True
     overlap_correction: float = 1.0
+    contact_patches: bool = True
+    patch_reactions: bool = True
 
     def __post_init__(self):
         for name, low, high in (("collision_passes", 0, 1000), ("contact_passes", 0, 1000),
@@ -100,7 +114,8 @@ class SolverConfig:
                              f"got {self.rotation_order!r}")
         if self.sweep not in (None, True, False):
             raise ValueError(f"SolverConfig.sweep must be None, True or False, got {self.sweep!r}")
-        for name in ("sleep", "detect_every_pass", "keep_energy"):
+        for name in ("sleep", "detect_every_pass", "keep_energy", "contact_patches",
+                     "patch_reactions"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"SolverConfig.{name} must be True or False, got "
                                  f"{getattr(self, name)!r}")
@@ -137,6 +152,7 @@ class SolverConfig:
                 "sleep": self.sleep, "sleep_speed": float(self.sleep_speed),
                 "detect_every_pass": self.detect_every_pass,
                 "keep_energy": self.keep_energy, "overlap_correction": self.overlap_correction,
+                "contact_patches": self.contact_patches, "patch_reactions": self.patch_reactions,
                 "gravity": magnitude, "up": tuple(float(u) for u in up)}
 
     def phases(self, gravity: bool = True) -> dict[str, bool]:

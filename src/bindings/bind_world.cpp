@@ -65,6 +65,8 @@ Settings read_settings(const nb::dict& s) {
     out.detect_every_pass = item<bool>(s, "detect_every_pass");
     out.keep_energy = item<bool>(s, "keep_energy");
     out.overlap_correction = item<double>(s, "overlap_correction");
+    out.contact_patches = item<bool>(s, "contact_patches");
+    out.patch_reactions = item<bool>(s, "patch_reactions");
     out.gravity = item<double>(s, "gravity");
     const auto up = item<std::array<double, 3>>(s, "up");
     out.up = {up[0], up[1], up[2]};

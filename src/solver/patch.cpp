@@ -467,9 +467,9 @@ void apply_with_spin_friction(const BodyStates& bodies, const BodyModel& model, 
 
 PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int a, int b,
                           Movable movable, const ContactSet& set, int64_t seed, int64_t count,
-                          double e, double mu, Vec3 prior, double dt) {
-    const PatchResult unresolved = {UNRESOLVED, {0.0, 0.0, 0.0}};
-    const PatchResult at_rest = {AT_REST, {0.0, 0.0, 0.0}};
+                          double e, double mu, Vec3 prior, double dt, bool lessen) {
+    const PatchResult unresolved = {UNRESOLVED, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
+    const PatchResult at_rest = {AT_REST, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
     // geometric centroid and mean normal of the patch
     Vec3 c = {0.0, 0.0, 0.0}, n = {0.0, 0.0, 0.0};
     int m = 0;
@@ -555,19 +555,19 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
             const double jn = j.x * n.x + j.y * n.y + j.z * n.z;
             const Vec3 mo = moment(d, sol, 3, tips + 1);
             const double mn = mo.x * n.x + mo.y * n.y + mo.z * n.z;
-            if (jn <= 0.0) {
-                return unresolved;
-            }
             // Coulomb on the step's total through this patch
             const Vec3 f = add(prior, j);
             const double fn = f.x * n.x + f.y * n.y + f.z * n.z;
+            if (!(lessen ? fn > 0.0 : jn > 0.0)) {
+                return unresolved;
+            }
             const Vec3 t = {f.x - fn * n.x, f.y - fn * n.y, f.z - fn * n.z};
             if (std::sqrt(t.x * t.x + t.y * t.y + t.z * t.z) <= mu * fn &&
                 std::fabs(mn) <= mu * fn * rho &&
                 pressure_inside(set, seed, count, c, n,
                                 {mo.x - mn * n.x, mo.y - mn * n.y, mo.z - mn * n.z}, fn)) {
                 apply_pair(bodies, model, a, b, movable, j, mo, ra, rb);
-                return {APPLIED, j};
+                return {APPLIED, j, mo};
             }
         }
     }
@@ -596,10 +596,10 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
     if (!solve_sliding(big, d, tips, s, n, target, vn, w, jn, mo)) {
         return unresolved;
     }
-    if (jn <= 0.0) {
+    const double fn = jn + prior.x * n.x + prior.y * n.y + prior.z * n.z;
+    if (!(lessen ? fn > 0.0 : jn > 0.0)) {
         return unresolved;
     }
-    const double fn = jn + prior.x * n.x + prior.y * n.y + prior.z * n.z;
     if (!pressure_inside(set, seed, count, c, n, mo, fn)) {
         return unresolved;
     }
@@ -609,7 +609,7 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
     } else {
         apply_pair(bodies, model, a, b, movable, j, mo, ra, rb);
     }
-    return {APPLIED, j};
+    return {APPLIED, j, mo};
 }
 
 }  // namespace rg

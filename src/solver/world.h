@@ -34,6 +34,10 @@ struct Settings {
     bool detect_every_pass = false;  // contacts.h: the narrow phase in every pass
     bool keep_energy = true;   // integrate.h: rotation update put back on the body's energy
     double overlap_correction = 1.0;  // overlap.h: fraction of excess overlap removed per step
+    bool contact_patches = true;  // solver.h: patch wrenches between movable bodies, and a body
+                                  //   held by immovable ones against all of them at once
+    bool patch_reactions = true;  // solver.h: shock impulses booked to pairs by the lever rule,
+                                  //   friction's reaction passed to dynamic supports
     double gravity = 0.0;      // |g|, m/s^2
     Vec3 up = {0.0, 0.0, 1.0};  // unit vector against gravity
 };
