@@ -68,13 +68,16 @@ class SolverConfig:
         sliding without rocking) as a patch against an immovable one does; off, one impulse at
         the approaching points' centroid, which leaves a light body on a far heavier one
         rocking (a 1 mm cube on a 1 m cube, mass ratio 1e9, moved at 1.5e-5 m/s after 1 s at
-        dt = 1/60).
-    patch_reactions: shock propagation books each patch's impulse to the pairs behind it by
+        dt = 1/60); and a body touching only static and kinematic bodies is resolved against
+        all of them at once, as shock propagation does (pair by pair, the impulse that stopped
+        a plank at one of two bars lifted it at the other, and it rocked for good).
+    patch_reactions: each patch's impulse is booked to the pairs behind it by each patch's impulse to the pairs behind it by
         the lever rule (``World.contacts`` then reports each support's reaction; off, the
-        whole patch's impulse goes to one pair), and passes the friction it applies against a
-        dynamic support on to that support as its reaction, then resolves the levels again
-        (off, that reaction is lost: a block pulled under another on a frictionless floor
-        gained 1.2% momentum beyond F T).
+        whole patch's impulse goes to one pair), and passes the sliding friction it applies
+        against a dynamic support on to that support as its reaction, then resolves the
+        levels again (off, that reaction is lost: a block pulled under another on a
+        frictionless floor gained 1.2% momentum beyond F T; static friction's is still lost,
+        see docs/architecture.md).
     detect_every_pass: run the narrow phase again at the predicted poses in every pass of
         every impulse phase (the original GBF formulation) instead of finding each pair's
         contacts once per step and carrying their separations through the passes

@@ -87,6 +87,41 @@ Quat restore_energy(Quat q, const Mat3& r, Vec3 l, Vec3 inverse_moments, double 
     return normalize(multiply(q, d));
 }
 
+// The body axis (0, 1, 2) about which a body with exactly two equal principal moments is
+// symmetric (the third moment differs), or -1 (all three equal, or none).
+int symmetry_axis(Vec3 inverse_moments) {
+    const double x = inverse_moments.x, y = inverse_moments.y, z = inverse_moments.z;
+    if (x == y && y != z) {
+        return 2;
+    }
+    if (y == z && z != x) {
+        return 0;
+    }
+    return x == z && x != y ? 1 : -1;
+}
+
+// The exact torque-free motion of a symmetric body over h (s) with world angular momentum l:
+// a turn about l by |l| h / I1 (world side) and a spin about the symmetry axis by
+// (1/I3 - 1/I1) L3 h (body side), I1 the two equal moments, I3 the axis's, L3 = l along the
+// axis (constant). omega = l / I1 + (1/I3 - 1/I1) L3 e3 is exactly the sum of the two turns'
+// rates, and the axis e3 only turns with the first, so they are the motion for any h: no
+// sub-steps, and |L| and the energy are kept exactly. Buss's updates expand it in omega h
+// and are unstable for a fast flat top (I3 near 2 I1) once |omega| h > ~0.4.
+Quat symmetric_rotation(Quat q, const Mat3& r, Vec3 l, Vec3 inverse_moments, int axis, double h) {
+    const double equal = inverse_moments[(axis + 1) % 3];  // 1 / I1
+    const double size = length(l);
+    if (size == 0.0) {
+        return q;
+    }
+    const double turn = 0.5 * size * equal * h;  // half angles
+    const double spin = 0.5 * (inverse_moments[axis] - equal) * rotate_inverse(r, l)[axis] * h;
+    const double st = std::sin(turn) / size, ss = std::sin(spin);
+    const Quat world = {std::cos(turn), st * l.x, st * l.y, st * l.z};
+    const Quat body = {std::cos(spin), axis == 0 ? ss : 0.0, axis == 1 ? ss : 0.0,
+                       axis == 2 ? ss : 0.0};
+    return normalize(multiply(multiply(world, q), body));
+}
+
 }  // namespace
 
 int rotation_substeps(double speed, double dt) {
@@ -160,6 +195,13 @@ void update_positions(const BodyStates& bodies, const BodyModel& model, double d
         const Vec3 l = bodies.angular_momentum[i];
         const Vec3 tau = free ? bodies.torque[i] : Vec3{0.0, 0.0, 0.0};
         const Vec3 inverse_moments = model.inverse_moments[i];
+        const int axis = symmetry_axis(inverse_moments);
+        if (axis >= 0 && tau.x == 0.0 && tau.y == 0.0 && tau.z == 0.0) {
+            q = symmetric_rotation(q, r, l, inverse_moments, axis, dt);
+            r = rotation_from_quaternion(q);
+            bodies.angular_velocity[i] = apply_inverse_inertia(r, inverse_moments, l);
+            continue;
+        }
         const double speed = std::sqrt(w.x * w.x + w.y * w.y + w.z * w.z);
         const int substeps = rotation_substeps(speed, dt);
         const double h = dt / substeps;

@@ -468,8 +468,8 @@ void apply_with_spin_friction(const BodyStates& bodies, const BodyModel& model, 
 PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int a, int b,
                           Movable movable, const ContactSet& set, int64_t seed, int64_t count,
                           double e, double mu, Vec3 prior, double dt, bool lessen) {
-    const PatchResult unresolved = {UNRESOLVED, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
-    const PatchResult at_rest = {AT_REST, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
+    const PatchResult unresolved = {UNRESOLVED, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, false};
+    const PatchResult at_rest = {AT_REST, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, false};
     // geometric centroid and mean normal of the patch
     Vec3 c = {0.0, 0.0, 0.0}, n = {0.0, 0.0, 0.0};
     int m = 0;
@@ -567,7 +567,7 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
                 pressure_inside(set, seed, count, c, n,
                                 {mo.x - mn * n.x, mo.y - mn * n.y, mo.z - mn * n.z}, fn)) {
                 apply_pair(bodies, model, a, b, movable, j, mo, ra, rb);
-                return {APPLIED, j, mo};
+                return {APPLIED, j, mo, false};
             }
         }
     }
@@ -609,7 +609,7 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
     } else {
         apply_pair(bodies, model, a, b, movable, j, mo, ra, rb);
     }
-    return {APPLIED, j, mo};
+    return {APPLIED, j, mo, mu > 0.0};
 }
 
 }  // namespace rg

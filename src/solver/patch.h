@@ -68,6 +68,7 @@ struct PatchResult {
     Vec3 impulse;  // the linear impulse applied to a, N s
     Vec3 moment;   // the angular impulse applied to a besides impulse at the patch's centroid
                    // (its part about n without torsional friction), N m s
+    bool sliding;  // friction at its Coulomb limit (the sliding wrench with mu > 0)
 };
 
 // Which bodies of a pair take impulses: false treats one as infinite mass (kinematic, static,

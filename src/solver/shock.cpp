@@ -161,6 +161,23 @@ int resolve_levels(WorldStep& w, int64_t m, double dt) {
     return reactions;
 }
 
+// Apply the reactions held back in w.reaction (solver.h) to their bodies and clear them.
+void apply_reactions(WorldStep& w) {
+    const int n = w.num_bodies();
+    const BodyStates& s = w.bodies;
+    for (int i = 0; i < n; ++i) {
+        const Vec3 p = w.reaction[i], l = w.reaction[n + i];
+        if (p.x == 0.0 && p.y == 0.0 && p.z == 0.0 && l.x == 0.0 && l.y == 0.0 && l.z == 0.0) {
+            continue;
+        }
+        s.velocity[i] = add(s.velocity[i], scale(w.model.inverse_mass[i], p));
+        s.angular_momentum[i] = add(s.angular_momentum[i], l);
+        s.angular_velocity[i] = rotate(s.inverse_inertia[i], s.angular_momentum[i]);
+        w.reaction[i] = {0.0, 0.0, 0.0};
+        w.reaction[n + i] = {0.0, 0.0, 0.0};
+    }
+}
+
 // Did the levels' impulses bring a pair into contact that was apart when the graph was
 // built? Its bodies overlap at the predicted poses now, and the graph ordered them by
 // nothing: the lower one, pushed up off its supports, runs into a body that was falling
@@ -190,7 +207,11 @@ void propagate_world_shock(WorldStep& w, int64_t pairs, double dt) {
         // while any were passed on (a block sliding on a block on a frictionless floor: once)
         int reactions = resolve_levels(w, m, dt);
         for (int again = 0; reactions > 0 && again < REACTION_ROUNDS; ++again) {
+            apply_reactions(w);
             reactions = resolve_levels(w, m, dt);
+        }
+        if (reactions > 0) {
+            apply_reactions(w);  // what the last round passed on: the next step's to settle
         }
         if (!brought_together(w, pairs, dt)) {
             break;

@@ -134,6 +134,7 @@ struct Pressures {
     double jn;  // N s; 0: not determined (the caller books the impulse whole)
     Vec3 beta;  // N s / m, in the patch's plane
     Vec3 centroid;
+    Vec3 n;     // the patch's mean normal
     int k;
 
     double at(Vec3 x) const { return jn / k + dot(beta, sub(x, centroid)); }
@@ -147,7 +148,7 @@ struct Pressures {
 // when j does not press (j_n <= 0) or the patch has one point.
 Pressures patch_pressures(const ContactSet& set, int64_t seed, int64_t count, Vec3 c, Vec3 j,
                           Vec3 m) {
-    Pressures out = {0.0, {0.0, 0.0, 0.0}, patch_centroid(set, seed, count), 0};
+    Pressures out = {0.0, {0.0, 0.0, 0.0}, patch_centroid(set, seed, count), {0.0, 0.0, 0.0}, 0};
     Vec3 n = {0.0, 0.0, 0.0};
     for (int64_t i = seed; i < count; ++i) {
         if (set.group[i] == seed) {
@@ -194,17 +195,21 @@ Pressures patch_pressures(const ContactSet& set, int64_t seed, int64_t count, Ve
         }
     }
     out.jn = jn;
+    out.n = n;
     return out;
 }
 
-// The reaction across gravity: the part of `share` (an impulse on the resolved body at point
-// x) off the up axis, applied reversed to contact i's partner when that is a dynamic body
-// held frozen by shock propagation (else it took its share already, or takes none). Along
-// gravity the frozen support takes nothing (what keeps a stack from sinking: the ground
-// takes it in the end); across it nothing else would: friction, and the normal impulse of a
-// support tilted by the friction it took (a block pulled on a frictionless floor, the block
-// on it sliding, lost 5e-4 of F T at dt = 1/60 with the normal's part off). Returns 1 if
-// applied, else 0.
+// The reaction across gravity of a sliding patch: the part of `share` (an impulse on the
+// resolved body at point x) off the up axis, held back reversed in w.reaction for contact i's
+// partner when that is a dynamic body held frozen by shock propagation (else it took its
+// share already, or takes none); shock.cpp applies it once the levels are done. Applied at
+// once, the supports would move under the bodies still to be resolved on them, which then
+// followed them and were left moving when the next round stopped the supports (a box on two
+// boxes rose off them). Along gravity the frozen support takes nothing (what keeps a stack
+// from sinking: the ground takes it in the end); across it nothing else would: friction, and
+// the normal impulse of a support tilted by the friction it took (a block pulled on a
+// frictionless floor, the block on it sliding, lost 5e-4 of F T at dt = 1/60 with the
+// normal's part off). Returns 1 if applied, else 0.
 int react(const WorldStep& w, const ContactSet& set, int64_t i, Vec3 x, Vec3 share) {
     const int partner = static_cast<int>(set.partner[i]);
     if (w.model.motion[partner] != DYNAMIC) {
@@ -212,19 +217,23 @@ int react(const WorldStep& w, const ContactSet& set, int64_t i, Vec3 x, Vec3 sha
     }
     const Vec3 up = w.settings->up;
     const Vec3 t = sub(share, scale(dot(share, up), up));
-    apply_pair(w.bodies, w.model, partner, partner, {true, false}, scale(-1.0, t),
-               {0.0, 0.0, 0.0}, sub(x, set.centre_b[i]), {0.0, 0.0, 0.0});
+    const int n = w.num_bodies();
+    w.reaction[partner] = sub(w.reaction[partner], t);
+    w.reaction[n + partner] = sub(w.reaction[n + partner], cross(sub(x, set.centre_b[i]), t));
     return 1;
 }
 
 // Add the patch's impulse j (on its body; with the angular impulse m, applied at c) to the
 // step totals of its pairs. A patch of several pairs (a body on two frozen supports, shock.cpp)
-// with Settings::patch_reactions splits j by the pressures of patch_pressures, each pair
-// taking j times its points' share of j_n, so each pair's total is the reaction its support
-// gives; otherwise the whole of j goes to the seed contact's pair. frozen (shock
-// propagation's patches against frozen bodies, with patch_reactions): friction's reaction
-// goes to each dynamic partner too, point by point by the same shares (react); *reactions
-// counts them. Torsional friction's reaction is not passed on.
+// with Settings::patch_reactions splits j by the pressures of patch_pressures (its normal
+// part point by point, its tangential part in proportion to the pressing points' pressures),
+// so each pair's total is the reaction its support gives; otherwise the whole of j goes to
+// the seed contact's pair. frozen (shock
+// propagation's sliding patches against frozen bodies, with patch_reactions): friction's
+// reaction goes to each dynamic partner too, point by point by the same shares (react);
+// *reactions counts them. Static friction's reaction is not passed on: with the normal
+// impulse held back it tips the support, which the bodies on it then hold tilted (a cube
+// dropped on a cube came to rest 0.015 deg off level); nor is torsional friction's.
 void book_impulse(const WorldStep& w, const ContactSet& set, int64_t seed, int64_t count, Vec3 c,
                   Vec3 j, Vec3 m, bool frozen, int* reactions) {
     const bool split = w.settings->patch_reactions;
@@ -233,7 +242,7 @@ void book_impulse(const WorldStep& w, const ContactSet& set, int64_t seed, int64
         several = set.group[i] == seed && set.source[i] != set.source[seed];
     }
     const Pressures p = several && split ? patch_pressures(set, seed, count, c, j, m)
-                                         : Pressures{0.0, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, 0};
+                                         : Pressures{0.0, {}, {}, {}, 0};
     const bool passed_on = frozen && split && reactions != nullptr;
     if (p.jn == 0.0) {
         record_impulse(w, set, seed, j);
@@ -242,9 +251,18 @@ void book_impulse(const WorldStep& w, const ContactSet& set, int64_t seed, int64
         }
         return;
     }
+    // the normal part by the pressures, the tangential part (friction) by the pressing ones:
+    // a moment's pressures (large and of both signs where j_n is small) would scale it up
+    const Vec3 tangential = sub(j, scale(p.jn, p.n));
+    double pressing = 0.0;
+    for (int64_t i = seed; i < count; ++i) {
+        pressing += set.group[i] == seed ? std::max(p.at(set.point[i]), 0.0) : 0.0;
+    }
     for (int64_t i = seed; i < count; ++i) {
         if (set.group[i] == seed) {
-            const Vec3 share = scale(p.at(set.point[i]) / p.jn, j);
+            const double pi = p.at(set.point[i]);
+            const Vec3 share =
+                add(scale(pi, p.n), scale(std::max(pi, 0.0) / pressing, tangential));
             Vec3& total = w.pair_impulse[set.source[i]];
             total = add(total, scale(set.orient[i], share));
             if (passed_on) {
@@ -431,10 +449,11 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
             const Vec3 prior = prior_impulse(w, set, seed, count);
             const PatchResult result =
                 resolve_patch(s, model, a, b, movable, set, seed, count, e, mu, prior, dt,
-                              w.settings->patch_reactions);
+                              w.settings->patch_reactions && mode == SHOCK);
             if (result.outcome == APPLIED) {
                 book_impulse(w, set, seed, count, patch_centroid(set, seed, count),
-                             result.impulse, result.moment, frozen, reactions);
+                             result.impulse, result.moment,
+                             frozen && result.sliding, reactions);
                 applied += 1;
                 continue;
             }
@@ -467,7 +486,7 @@ int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set,
         } else {
             apply_pair(s, model, a, b, movable, j, {0.0, 0.0, 0.0}, ra, rb);
         }
-        book_impulse(w, set, seed, count, c, j, {0.0, 0.0, 0.0}, frozen, reactions);
+        book_impulse(w, set, seed, count, c, j, {0.0, 0.0, 0.0}, false, reactions);
         applied += 1;
     }
     return applied;

@@ -66,8 +66,9 @@ int resolve_pair(WorldStep& w, int64_t k, double dt, Vec3 lookahead, ImpulseMode
 // Resolve body a's contacts in `set` (normals towards a; each against the body set.partner[i])
 // in stage `mode`; returns the number of impulses applied (solver.cpp says how).
 // reactions (shock propagation's resolves against frozen bodies): where given, with
-// Settings::patch_reactions, the friction applied against a frozen dynamic partner is passed
-// on to it reversed, and *reactions counts how often (the caller resolves the levels again).
+// Settings::patch_reactions, the sliding friction applied against a frozen dynamic partner is
+// held back for it reversed (w.reaction), and *reactions counts how often (the caller applies
+// them and resolves the levels again).
 int resolve_patches(WorldStep& w, int a, Movable movable, const ContactSet& set, int64_t count,
                     double dt, ImpulseMode mode, double ramp_e, int* reactions = nullptr);
 

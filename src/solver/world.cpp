@@ -194,6 +194,7 @@ StepContext::StepContext(int num_worlds, Geometry geometry, std::vector<int32_t>
     }
     pairs_of_.assign(b * n, 0);
     overlap_shift_.assign(b * n, {0.0, 0.0, 0.0});
+    reaction_.assign(2 * b * n, {0.0, 0.0, 0.0});
     awake_pairs_.assign(b, 0);
     stage_seconds.assign(b * STAGE_COUNT, 0.0);
     stage_calls.assign(b * STAGE_COUNT, 0);
@@ -292,6 +293,7 @@ WorldStep StepContext::world(int w) {
     s.wide = wide_.rows(w);
     s.pairs_of = world_rows(pairs_of_, w, n);
     s.overlap_shift = world_rows(overlap_shift_, w, n);
+    s.reaction = world_rows(reaction_, w, 2 * n);
     s.graph = graph_.rows(w);
     s.rest = {world_rows(asleep, w, n),           &awake_pairs_[w],
               world_rows(island_, w, n),          world_rows(previous_island_, w, n),

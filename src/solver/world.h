@@ -146,6 +146,8 @@ struct WorldStep {
     ContactSet wide;         // one body's contacts with all its frozen supports
     Span<int64_t> pairs_of;  // (n,) in how many listed pairs each body is
     Span<Vec3> overlap_shift;  // (n,) m, overlap.h's position corrections
+    Span<Vec3> reaction;     // (2 n,) N s, N m s: shock propagation's reactions held back
+                             //        (solver.h), linear then angular, zero between rounds
     Graph graph;
     Rest rest;
     StageTimers timers;      // the world's time per stage, filled by step_world
@@ -275,6 +277,7 @@ private:
     ContactSetBuffers scratch_, wide_;
     Array<int64_t> pairs_of_;
     Array<Vec3> overlap_shift_;
+    Array<Vec3> reaction_;
     GraphBuffers graph_;
     // sleeping
     Array<int64_t> awake_pairs_, island_, previous_island_, island_bodies_, island_pairs_,
