@@ -87,8 +87,8 @@ Quat restore_energy(Quat q, const Mat3& r, Vec3 l, Vec3 inverse_moments, double 
     return normalize(multiply(q, d));
 }
 
-// The body axis (0, 1, 2) about which a body with exactly two equal principal moments is
-// symmetric (the third moment differs), or -1 (all three equal, or none).
+}  // namespace
+
 int symmetry_axis(Vec3 inverse_moments) {
     const double x = inverse_moments.x, y = inverse_moments.y, z = inverse_moments.z;
     if (x == y && y != z) {
@@ -100,13 +100,6 @@ int symmetry_axis(Vec3 inverse_moments) {
     return x == z && x != y ? 1 : -1;
 }
 
-// The exact torque-free motion of a symmetric body over h (s) with world angular momentum l:
-// a turn about l by |l| h / I1 (world side) and a spin about the symmetry axis by
-// (1/I3 - 1/I1) L3 h (body side), I1 the two equal moments, I3 the axis's, L3 = l along the
-// axis (constant). omega = l / I1 + (1/I3 - 1/I1) L3 e3 is exactly the sum of the two turns'
-// rates, and the axis e3 only turns with the first, so they are the motion for any h: no
-// sub-steps, and |L| and the energy are kept exactly. Buss's updates expand it in omega h
-// and are unstable for a fast flat top (I3 near 2 I1) once |omega| h > ~0.4.
 Quat symmetric_rotation(Quat q, const Mat3& r, Vec3 l, Vec3 inverse_moments, int axis, double h) {
     const double equal = inverse_moments[(axis + 1) % 3];  // 1 / I1
     const double size = length(l);
@@ -122,7 +115,24 @@ Quat symmetric_rotation(Quat q, const Mat3& r, Vec3 l, Vec3 inverse_moments, int
     return normalize(multiply(multiply(world, q), body));
 }
 
-}  // namespace
+Quat turned(Quat q, const Mat3& r, Vec3 l, Vec3 omega, Vec3 inverse_moments, double h) {
+    const int axis = symmetry_axis(inverse_moments);
+    return axis >= 0 ? symmetric_rotation(q, r, l, inverse_moments, axis, h)
+                     : rotate_by_angular_velocity(q, omega, h);
+}
+
+Vec3 turn_between(Quat from, Quat to) {
+    Quat d = multiply(to, {from.w, -from.x, -from.y, -from.z});
+    if (d.w < 0.0) {
+        d = {-d.w, -d.x, -d.y, -d.z};
+    }
+    const double s = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    if (s == 0.0) {
+        return {0.0, 0.0, 0.0};
+    }
+    const double angle = 2.0 * std::atan2(s, d.w);
+    return {angle * d.x / s, angle * d.y / s, angle * d.z / s};
+}
 
 int rotation_substeps(double speed, double dt) {
     const double turns = std::ceil(speed * dt / QUARTER_TURN);
