@@ -18,9 +18,9 @@ import hashlib
 
 import gymnasium as gym
 import numpy as np
+from rigid_gym.envs.scripted import scripted_policy
 
 import rigid_gym  # noqa: F401  (registers the envs)
-from rigid_gym.envs.scripted import scripted_policy
 
 TASKS = ("Push", "Stack", "Throw")
 

@@ -17,8 +17,10 @@
 //   (infinite mass). Leftover approach can then only push upper bodies: a stack cannot sink.
 //
 // Within a pair, contacts are grouped into patches of similar normal, each resolved at once
-// (resolve_patches): against an immovable partner by the wrench of patch.h, otherwise by one
-// impulse at its centroid. Shock propagation combines a body's contacts with all its frozen
+// (resolve_patches): against an immovable partner by the wrench of patch.h, and against a
+// movable one too with Settings::contact_patches, otherwise by one impulse at its centroid;
+// with contact_patches the contact stage resolves a body touching only static and kinematic
+// bodies against all of them at once. Shock propagation combines a body's contacts with all its frozen
 // supports into such patches. Coulomb's limit applies to each pair's impulse over the whole
 // step (WorldStep::pair_impulse).
 #pragma once
