@@ -8,6 +8,10 @@
 // non-approaching at the predicted poses, as long as the graph ordered every pair the levels'
 // impulses bring into contact; a step whose levels brought apart bodies together builds the
 // graph again from the new velocities and resolves the levels again (brought_together).
+// A frozen support takes no impulse; with Settings::patch_reactions the sliding friction a
+// body gets against a frozen dynamic support is held back as the support's reaction, applied
+// once the levels are done, and the levels are resolved again (solver.h), so friction
+// between bodies keeps momentum.
 #include <algorithm>
 
 #include "solver/contacts.h"
@@ -108,7 +112,8 @@ int resolve_supported_body(WorldStep& w, int64_t node, int64_t current, double d
         }
         count += found;
     }
-    return applied + resolve_patches(w, body, {true, false}, wide, count, dt, SHOCK, 0.0, reactions);
+    return applied +
+           resolve_patches(w, body, {true, false}, wide, count, dt, SHOCK, 0.0, reactions);
 }
 
 // resolve_supported_body for nodes by_level[start:end] of level `current`; impulses applied.
