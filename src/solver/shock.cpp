@@ -126,12 +126,16 @@ int resolve_level_supports(WorldStep& w, int64_t start, int64_t end, int64_t cur
     return applied;
 }
 
-// The levels of the m nodes in order, each against its frozen supports, then its inside
-// pairs (see top); returns how many frictional reactions were passed on to frozen supports.
-int resolve_levels(WorldStep& w, int64_t m, double dt) {
+// The levels of the m nodes in order from level `lowest` up, each against its frozen supports,
+// then its inside pairs (see top); returns how many frictional reactions were passed on to
+// frozen supports.
+int resolve_levels(WorldStep& w, int64_t m, double dt, int64_t lowest) {
     const Graph& graph = w.graph;
     int reactions = 0;
     int64_t start = 0;
+    while (start < m && graph.level[graph.by_level[start]] < lowest) {
+        start += 1;  // levels below every body that moved: as they were left
+    }
     while (start < m) {
         const int64_t current = graph.level[graph.by_level[start]];
         int64_t end = start;
@@ -166,10 +170,12 @@ int resolve_levels(WorldStep& w, int64_t m, double dt) {
     return reactions;
 }
 
-// Apply the reactions held back in w.reaction (solver.h) to their bodies and clear them.
-void apply_reactions(WorldStep& w) {
+// Apply the reactions held back in w.reaction (solver.h) to their bodies and clear them;
+// returns the lowest level of a body that took one (the levels below it are unchanged).
+int64_t apply_reactions(WorldStep& w) {
     const int n = w.num_bodies();
     const BodyStates& s = w.bodies;
+    int64_t lowest = w.graph.level.size;
     for (int i = 0; i < n; ++i) {
         const Vec3 p = w.reaction[i], l = w.reaction[n + i];
         if (p.x == 0.0 && p.y == 0.0 && p.z == 0.0 && l.x == 0.0 && l.y == 0.0 && l.z == 0.0) {
@@ -180,7 +186,9 @@ void apply_reactions(WorldStep& w) {
         s.angular_velocity[i] = rotate(s.inverse_inertia[i], s.angular_momentum[i]);
         w.reaction[i] = {0.0, 0.0, 0.0};
         w.reaction[n + i] = {0.0, 0.0, 0.0};
+        lowest = std::min(lowest, w.graph.level[w.graph.node_of[i]]);
     }
+    return lowest;
 }
 
 // Did the levels' impulses bring a pair into contact that was apart when the graph was
@@ -210,10 +218,9 @@ void propagate_world_shock(WorldStep& w, int64_t pairs, double dt) {
         // friction's reactions passed on to frozen supports (Settings::patch_reactions) move
         // them against their own supports: the levels are resolved again from the ground up
         // while any were passed on (a block sliding on a block on a frictionless floor: once)
-        int reactions = resolve_levels(w, m, dt);
+        int reactions = resolve_levels(w, m, dt, 0);
         for (int again = 0; reactions > 0 && again < REACTION_ROUNDS; ++again) {
-            apply_reactions(w);
-            reactions = resolve_levels(w, m, dt);
+            reactions = resolve_levels(w, m, dt, apply_reactions(w));
         }
         if (reactions > 0) {
             apply_reactions(w);  // what the last round passed on: the next step's to settle

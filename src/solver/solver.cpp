@@ -238,7 +238,7 @@ void book_impulse(const WorldStep& w, const ContactSet& set, int64_t seed, int64
                   Vec3 j, Vec3 m, bool frozen, int* reactions) {
     const bool split = w.settings->patch_reactions;
     bool several = false;
-    for (int64_t i = seed; i < count && !several; ++i) {
+    for (int64_t i = seed; i < count && split && !several; ++i) {
         several = set.group[i] == seed && set.source[i] != set.source[seed];
     }
     const Pressures p = several && split ? patch_pressures(set, seed, count, c, j, m)
