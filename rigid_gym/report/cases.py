@@ -402,10 +402,9 @@ CASES = (
          "the contact passes carry the strike down the row within a step (Gauss-Seidel: each "
          "pass passes part of it on); what a step leaves, the next steps carry on, so the "
          "error falls with dt and, at a dt, with the number of passes. At dt = 1/240 the "
-         "default's error is another one: with contacts found once per step the cubes turn "
-         "slightly while the strike passes (up to 4e-5 rad/s) and their speeds keep a spread "
-         "of a few um/s; with the narrow phase every pass, or the collision phase on "
-         "(section 4), they agree to 1e-8."),
+         "cubes agree to 5e-9 (with one impulse per patch between two cubes, before "
+         "SolverConfig.contact_patches, they turned slightly while the strike passed and kept "
+         "a spread of a few um/s)."),
     Case("torque_free", "torque-free body, I = (1, 2, 3) kg m^2, omega0 = (0.3, 0, 1) rad/s, 10 s",
          "Jacobi elliptic functions (Landau-Lifshitz §37)",
          ("body angular velocity, max relative error", "energy, max relative error",
@@ -438,8 +437,10 @@ CASES = (
          "shock propagation holds the lower block frozen while it resolves the cube on it; the "
          "sliding friction it applies there is passed on to the block as its reaction and the "
          "levels resolved again (SolverConfig.patch_reactions); without that the momentum grows "
-         "beyond F T. The cube's speed error is the coarse steps' (it settles onto the block "
-         "over the first steps at dt = 1/30)."),
+         "beyond F T. Static friction's reaction is not passed on (docs/architecture.md): at "
+         "dt = 1/30, and with 2 contact passes at 1/60, the cube sticks to the block for its "
+         "first steps and the momentum ends 1e-2 above F T; from 1/60 (1/120 with 2 passes) "
+         "it is F T to round-off."),
     Case("heavy_top", f"symmetric top (I = {HEAVY_TOP_MOMENTS[0]:g}, {HEAVY_TOP_MOMENTS[2]:g} "
          f"kg m^2) spinning at {HEAVY_TOP_SPIN:g} rad/s on its tip, tilted {HEAVY_TOP_TILT:g} deg, "
          f"frictionless floor, e = 0, {HEAVY_TOP_SECONDS:g} s",
@@ -475,6 +476,8 @@ CASES = (
          {**PASS_SETTINGS, "no lever rule": {"patch_reactions": False}},
          "both bars hold the plank in one patch; its impulse is split between their pairs by "
          "the patch's linear pressure distribution (SolverConfig.patch_reactions), which for "
-         "two lines is the lever rule; without it the whole impulse is reported on one bar."),
+         "two lines is the lever rule; without it the whole impulse is reported on one bar. At "
+         "dt = 1/30 the plank falls through the bars (g dt^2 = 11 mm against their 10 mm): no "
+         "result."),
 )
 """Every closed-form case of the accuracy report, in report order."""

@@ -9,6 +9,7 @@ the legend.
 from __future__ import annotations
 
 import platform
+import textwrap
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -103,7 +104,7 @@ def work_precision_panel(ax, case: Case, curves: list[Curve], metric: int) -> No
         if np.isfinite(y):
             ax.annotate(dt_label(dt), (x, max(y, ROUND_OFF)), fontsize=6,
                         textcoords="offset points", xytext=(3, 3))
-    ax.set_title(case.title, fontsize=8)
+    ax.set_title("\n".join(textwrap.wrap(case.title, 70)), fontsize=8)
     ax.set_xlabel("wall time per simulated second (s/s)", fontsize=7)
     ax.set_ylabel(case.metrics[metric], fontsize=7)
     _log_axes(ax, 6)
