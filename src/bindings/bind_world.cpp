@@ -101,7 +101,9 @@ void bind_settings(nb::module_& m) {
         .def_rw("detect_every_pass", &Settings::detect_every_pass)
         .def_rw("keep_energy", &Settings::keep_energy)
         .def_rw("overlap_correction", &Settings::overlap_correction)
-        .def_rw("continuous", &Settings::continuous);
+        .def_rw("continuous", &Settings::continuous)
+        .def_rw("contact_patches", &Settings::contact_patches)
+        .def_rw("patch_reactions", &Settings::patch_reactions);
     nb::list stages;
     for (const char* name : STAGE_NAMES) {
         stages.append(name);

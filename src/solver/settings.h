@@ -17,6 +17,10 @@ struct Settings {
     bool keep_energy = true;          // integrate.h: rotation update put back on the body's energy
     double overlap_correction = 1.0;  // overlap.h: fraction of excess overlap removed per step
     bool continuous = true;           // continuous.h: pairs that move far in a step found at impact
+    bool contact_patches = true;      // solver.h: patch wrenches between movable bodies, and a
+                                      //   body held by immovable ones against all of them at once
+    bool patch_reactions = true;      // solver.h: shock impulses booked to pairs by the lever
+                                      //   rule, friction's reaction passed to dynamic supports
 };
 
 }  // namespace rg
