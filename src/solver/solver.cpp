@@ -228,10 +228,9 @@ int react(const StepContext& w, const ContactSet& set, int64_t i, Vec3 x, Vec3 s
 // with Settings::patch_reactions splits j by the pressures of patch_pressures (its normal
 // part point by point, its tangential part in proportion to the pressing points' pressures),
 // so each pair's total is the reaction its support gives; otherwise the whole of j goes to
-// the seed contact's pair. frozen (shock
-// propagation's sliding patches against frozen bodies, with patch_reactions): friction's
-// reaction goes to each dynamic partner too, point by point by the same shares (react);
-// *reactions counts them. Static friction's reaction is not passed on: with the normal
+// the seed contact's pair. frozen (shock propagation's sliding patches against frozen
+// bodies, with patch_reactions): friction's reaction goes to each dynamic partner too, point
+// by point by the same shares (react); *reactions counts them. Static friction's reaction is not passed on: with the normal
 // impulse held back it tips the support, which the bodies on it then hold tilted (a cube
 // dropped on a cube came to rest 0.015 deg off level); nor is torsional friction's.
 void book_impulse(const StepContext& w, const ContactSet& set, int64_t seed, int64_t count, Vec3 c,
