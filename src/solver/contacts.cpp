@@ -19,10 +19,15 @@ constexpr double REDETECT_DRIFT = SPECULATIVE_MARGIN - GRAPH_MARGIN;
 // pair in every pass.
 double bound(Vec3 v) { return std::fabs(v.x) + std::fabs(v.y) + std::fabs(v.z); }
 
-// Dynamic body i's orientation after dt free of torque (integrate.h's turned): a symmetric
-// body's exact motion, which its rotation update takes (a fast top predicted by omega dt was
-// struck on the floor where its tip was not), else the turn by omega dt.
+// Dynamic body i's orientation after dt free of torque (integrate.h's turned): with
+// Settings::exact_symmetric a symmetric body's exact motion, which its rotation update takes
+// (a fast top predicted by omega dt was struck on the floor where its tip was not), else the
+// turn by omega dt.
 Quat predicted_orientation(const StepContext& w, int i, double dt) {
+    if (!w.settings->exact_symmetric) {
+        return rotate_by_angular_velocity(w.bodies.orientation[i], w.bodies.angular_velocity[i],
+                                          dt);
+    }
     return turned(w.bodies.orientation[i], w.bodies.rotation[i], w.bodies.angular_momentum[i],
                   w.bodies.angular_velocity[i], w.model.inverse_moments[i], dt);
 }
@@ -37,7 +42,8 @@ Travel predicted_motion(const StepContext& w, int i, double dt, Vec3 lookahead) 
     const Vec3 v = w.bodies.velocity[i];
     const Vec3 la = motion == DYNAMIC ? lookahead : Vec3{0.0, 0.0, 0.0};
     const Vec3 shift = {la.x + dt * v.x, la.y + dt * v.y, la.z + dt * v.z};
-    if (motion == DYNAMIC && symmetry_axis(w.model.inverse_moments[i]) >= 0) {
+    if (motion == DYNAMIC && w.settings->exact_symmetric &&
+        symmetry_axis(w.model.inverse_moments[i]) >= 0) {
         const Quat q = w.bodies.orientation[i];
         return {shift, turn_between(q, predicted_orientation(w, i, dt))};
     }

@@ -184,7 +184,8 @@ void update_velocities(const BodyStates& bodies, const BodyModel& model, double 
 }
 
 void update_positions(const BodyStates& bodies, const BodyModel& model, double dt, int order,
-                      bool keep_energy, Span<const int64_t> acting, Span<const uint8_t> asleep) {
+                      bool keep_energy, bool exact_symmetric, Span<const int64_t> acting,
+                      Span<const uint8_t> asleep) {
     for (int64_t i = 0; i < bodies.position.size; ++i) {
         if (model.motion[i] == STATIC || (asleep.size > 0 && asleep[i])) {
             continue;
@@ -205,7 +206,7 @@ void update_positions(const BodyStates& bodies, const BodyModel& model, double d
         const Vec3 l = bodies.angular_momentum[i];
         const Vec3 tau = free ? bodies.torque[i] : Vec3{0.0, 0.0, 0.0};
         const Vec3 inverse_moments = model.inverse_moments[i];
-        const int axis = symmetry_axis(inverse_moments);
+        const int axis = exact_symmetric ? symmetry_axis(inverse_moments) : -1;
         if (axis >= 0 && tau.x == 0.0 && tau.y == 0.0 && tau.z == 0.0) {
             q = symmetric_rotation(q, r, l, inverse_moments, axis, dt);
             r = rotation_from_quaternion(q);

@@ -85,8 +85,11 @@ void update_velocities(const BodyStates& bodies, const BodyModel& model, double 
 // Bodies with asleep[i] set (sleep.h; asleep empty without sleeping) are left as they are:
 // their velocities are the last step's final ones, which moved them nowhere (the step is a
 // fixed point for them), so updating them would give the same bits.
+// exact_symmetric: a symmetric body (symmetry_axis) with no torque in the update turns by
+// symmetric_rotation instead (SolverConfig.exact_symmetric).
 void update_positions(const BodyStates& bodies, const BodyModel& model, double dt, int order,
-                      bool keep_energy, Span<const int64_t> acting, Span<const uint8_t> asleep);
+                      bool keep_energy, bool exact_symmetric, Span<const int64_t> acting,
+                      Span<const uint8_t> asleep);
 
 // Put every attached body at its offset from its parent, moving with the parent's velocity
 // and not turning.

@@ -21,6 +21,8 @@ struct Settings {
                                       //   body held by immovable ones against all of them at once
     bool patch_reactions = true;      // solver.h: shock impulses booked to pairs by the lever
                                       //   rule, friction's reaction passed to dynamic supports
+    bool exact_symmetric = true;      // integrate.h: a symmetric body free of torque turns by its
+                                      //   exact motion (symmetric_rotation), predicted so too
 };
 
 }  // namespace rg

@@ -247,7 +247,7 @@ Flow correct_overlaps(StepContext& w) {
 Flow position_update(StepContext& w) {
     const Settings& c = *w.settings;
     count_acting_pairs_of_bodies(w, *w.rest.awake_pairs);
-    update_positions(w.bodies, w.model, w.dt, c.rotation_order, c.keep_energy,
+    update_positions(w.bodies, w.model, w.dt, c.rotation_order, c.keep_energy, c.exact_symmetric,
                      {w.pairs_of.data, w.pairs_of.size}, asleep_bodies(w));
     for (int i = 0; i < w.num_bodies(); ++i) {
         w.bodies.force[i] = {0.0, 0.0, 0.0};
