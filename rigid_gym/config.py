@@ -33,8 +33,9 @@ class SolverConfig:
     collision_passes: sweeps of the collision phase (real restitution, old velocities); 0
         switches the phase off. Where every restitution is 0 an impact is left to the contact
         phase, which ends at e = 0 as well but can spread it differently through bodies in
-        contact (the report's struck row: speeds within 7.9e-6 of the closed form without
-        the phase, 7.7e-9 with it, at dt = 1/240).
+        contact (the report's struck row: speeds within 5.0e-9 of the closed form without
+        the phase, 6.8e-9 with it, at dt = 1/240; 7.9e-6 and 7.7e-9 without
+        ``contact_patches``).
     contact_passes: sweeps of the contact phase (restitution ramping from -0.9 to 0).
     shock_sweeps: sweeps per level of shock propagation; 0 switches it off. It only matters
         where a body can rest on another (or on the ground) under gravity; resting contact
@@ -78,6 +79,27 @@ class SolverConfig:
         it, a falling plate lands on a table top instead of sinking through. Other pairs
         are found as before, bit for bit. ``for_scene`` leaves it out where nothing can
         move that far (``rigid_gym.fast_motion``).
+    contact_patches: in the contact and shock phases, a face or edge patch between two movable
+        bodies gets the patch wrench of ``src/solver/patch.h`` (brought exactly to rest or to
+        sliding without rocking) as a patch against an immovable one does; off, one impulse at
+        the approaching points' centroid, which leaves a light body on a far heavier one
+        rocking (a 1 mm cube on a 1 m cube, mass ratio 1e9, moved at 1.5e-5 m/s after 1 s at
+        dt = 1/60); and a body touching only static and kinematic bodies is resolved against
+        all of them at once, as shock propagation does (pair by pair, the impulse that stopped
+        a plank at one of two bars lifted it at the other, and it rocked for good).
+    patch_reactions: each patch's impulse is booked to the pairs behind it by the lever
+        rule (``World.contacts`` then reports each support's reaction; off, the
+        whole patch's impulse goes to one pair), and passes the sliding friction it applies
+        against a dynamic support on to that support as its reaction, then resolves the
+        levels again (off, that reaction is lost: a block pulled under another on a
+        frictionless floor gained 1.2% momentum beyond F T; static friction's is still lost,
+        see docs/architecture.md).
+    exact_symmetric: a body with exactly two equal principal moments, free of torque in a
+        position update, turns by its exact torque-free motion (a turn about L and a spin
+        about its axis, ``symmetric_rotation`` in ``src/solver/integrate.h``) instead of the
+        rotation update of ``rotation_order``, at any dt, and the contact stages predict its
+        pose by the same motion; off, a fast flat top on its tip (|omega| dt = 1.25) precessed
+        at 250 times the closed-form rate.
     detect_every_pass: run the narrow phase again at the predicted poses in every pass of
         every impulse phase (the original GBF formulation) instead of finding each pair's
         contacts once per step and carrying their separations through the passes
@@ -97,6 +119,9 @@ class SolverConfig:
     overlap_correction: float = CORE_DEFAULTS.overlap_correction
     joint_passes: int = CORE_DEFAULTS.joint_passes
     continuous: bool = CORE_DEFAULTS.continuous
+    contact_patches: bool = CORE_DEFAULTS.contact_patches
+    patch_reactions: bool = CORE_DEFAULTS.patch_reactions
+    exact_symmetric: bool = CORE_DEFAULTS.exact_symmetric
 
     def __post_init__(self):
         for name, low, high in (("collision_passes", 0, 1000), ("contact_passes", 0, 1000),
@@ -118,7 +143,8 @@ class SolverConfig:
                              f"got {self.rotation_order!r}")
         if self.sweep not in (None, True, False):
             raise ValueError(f"SolverConfig.sweep must be None, True or False, got {self.sweep!r}")
-        for name in ("sleep", "detect_every_pass", "keep_energy", "continuous"):
+        for name in ("sleep", "detect_every_pass", "keep_energy", "continuous",
+                     "contact_patches", "patch_reactions", "exact_symmetric"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"SolverConfig.{name} must be True or False, got "
                                  f"{getattr(self, name)!r}")
@@ -154,7 +180,8 @@ class SolverConfig:
         phase by sort and sweep or not (``sweep`` as ``collision.uses_sweep`` decides it)."""
         s = _core.Settings()
         for name in ("collision_passes", "contact_passes", "shock_sweeps", "rotation_order",
-                     "sleep", "detect_every_pass", "keep_energy", "joint_passes", "continuous"):
+                     "sleep", "detect_every_pass", "keep_energy", "joint_passes", "continuous",
+                     "contact_patches", "patch_reactions", "exact_symmetric"):
             setattr(s, name, getattr(self, name))
         s.sleep_speed = float(self.sleep_speed)
         s.overlap_correction = float(self.overlap_correction)

@@ -9,6 +9,7 @@ the legend.
 from __future__ import annotations
 
 import platform
+import textwrap
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -103,7 +104,7 @@ def work_precision_panel(ax, case: Case, curves: list[Curve], metric: int) -> No
         if np.isfinite(y):
             ax.annotate(dt_label(dt), (x, max(y, ROUND_OFF)), fontsize=6,
                         textcoords="offset points", xytext=(3, 3))
-    ax.set_title(case.title, fontsize=8)
+    ax.set_title("\n".join(textwrap.wrap(case.title, 70)), fontsize=8)
     ax.set_xlabel("wall time per simulated second (s/s)", fontsize=7)
     ax.set_ylabel(case.metrics[metric], fontsize=7)
     _log_axes(ax, 6)
@@ -111,12 +112,15 @@ def work_precision_panel(ax, case: Case, curves: list[Curve], metric: int) -> No
 
 
 def figure_work_precision(results: Results, path: Path) -> None:
-    """3 x 3 grid: the first metric of every case."""
+    """A grid of 3 columns: the first metric of every case."""
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(3, 3, figsize=(15, 13))
+    rows = -(-len(CASES) // 3)
+    fig, axes = plt.subplots(rows, 3, figsize=(15, 4.35 * rows))
     for ax, case in zip(axes.flat, CASES):
         work_precision_panel(ax, case, [c for c in results.curves if c.case == case.key], 0)
+    for ax in axes.flat[len(CASES):]:
+        ax.set_visible(False)
     fig.suptitle("Error against run time (log-log), one curve per solver setting; labels at "
                  "points: dt (s); p = observed order (slope of log error vs log dt); hollow "
                  f"circles: error <= {ROUND_OFF:g} (round-off), drawn at that floor", fontsize=10)

@@ -289,3 +289,70 @@ def hanging_chain(angle: float, links: int = CHAIN_LINKS) -> rg.Scene:
         scene.add_revolute_joint(link, previous, k * CHAIN_LINK * down, (0.0, 1.0, 0.0))
         previous = link
     return scene
+
+
+BLOCK_MU = 0.3
+"""Friction coefficient between the two blocks of ``block_on_block`` (its floor has none)."""
+
+
+def block_on_block() -> rg.Scene:
+    """A 1 kg block 1 x 0.2 x 0.1 m (body 1) on a frictionless ground, and a 1 kg standard cube
+    (body 2) resting on it 0.4 m behind its centre, mu = BLOCK_MU between the two."""
+    scene = rg.Scene()
+    scene.add_ground(friction=0.0)
+    scene.add_body(rg.Box((0.5, 0.1, 0.05)), mass=1.0, friction=BLOCK_MU, position=(0, 0, 0.05))
+    scene.add_body(rg.Box((CUBE_HALF,) * 3), mass=1.0, friction=BLOCK_MU,
+                   position=(-0.4, 0, 0.1 + CUBE_HALF))
+    return scene
+
+
+TOP_MASS, TOP_ARM, TOP_TIP = 1.0, 0.05, 0.005
+"""The heavy top: kg; m from its centre of mass to the centre of its round tip; the tip's radius."""
+
+
+def spinning_top(moments, spin: float, tilt_deg: float, precession: float) -> rg.Scene:
+    """A symmetric top (body 1): a TOP_MASS capsule of radius TOP_TIP and half length TOP_ARM
+    with principal ``moments`` (I1, I1, I3) kg m^2 about its axis (body z), standing on its
+    lower cap on a frictionless ground (e = 0) tilted ``tilt_deg`` about x, spinning at
+    ``spin`` rad/s (omega . axis) and turning at ``precession`` rad/s about the vertical, its
+    centre at rest: the start of steady precession when ``precession`` is the closed form's."""
+    tilt = np.radians(tilt_deg)
+    axis = np.array([0.0, -np.sin(tilt), np.cos(tilt)])
+    omega = precession * np.array([0.0, 0.0, 1.0]) + (spin - precession * np.cos(tilt)) * axis
+    scene = rg.Scene()
+    scene.add_ground(friction=0.0, restitution=0.0)
+    scene.add_body(rg.Capsule(TOP_TIP, TOP_ARM), mass=TOP_MASS, inertia=moments, friction=0.0,
+                   position=(0, 0, TOP_ARM * np.cos(tilt) + TOP_TIP),
+                   orientation=(np.cos(tilt / 2), np.sin(tilt / 2), 0, 0),
+                   angular_velocity=omega)
+    return scene
+
+
+BAR_RADIUS = 0.02
+"""m: radius of the round bars of ``plank_on_bars``."""
+
+
+def plank_on_bars(bars=(-0.3, 0.2), friction: float = 0.5, radius: float = BAR_RADIUS) -> rg.Scene:
+    """A 1 kg plank 1 x 0.1 x 0.02 m (body 3) resting across two static round bars (capsules
+    of ``radius`` m, 0.4 m long, along y; bodies 1 and 2) at x = ``bars`` (m), their tops at
+    0.1 m + radius; every friction ``friction``."""
+    scene = rg.Scene()
+    scene.add_ground(friction=friction)
+    along_y = (np.cos(np.pi / 4), np.sin(np.pi / 4), 0.0, 0.0)
+    for x in bars:
+        scene.add_body(rg.Capsule(radius, 0.2), static=True, position=(x, 0, 0.1),
+                       orientation=along_y, friction=friction)
+    scene.add_body(rg.Box((0.5, 0.05, 0.01)), mass=1.0, friction=friction,
+                   position=(0, 0, 0.1 + radius + 0.01))
+    return scene
+
+
+def tiny_on_huge(offset=(0.13, 0.1), gap: float = 0.02) -> rg.Scene:
+    """A 1 mm cube (body 2, 1e-6 kg) dropped from ``gap`` m onto a 1 m cube (body 1, 1000 kg:
+    mass ratio 1e9) resting on the ground, ``offset`` (m) from the top face's centre."""
+    scene = rg.Scene()
+    scene.add_ground(friction=0.5)
+    scene.add_body(rg.Box((0.5,) * 3), density=1000.0, friction=0.5, position=(0, 0, 0.5))
+    scene.add_body(rg.Box((0.0005,) * 3), density=1000.0, friction=0.5,
+                   position=(offset[0], offset[1], 1.0005 + gap))
+    return scene

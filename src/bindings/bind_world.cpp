@@ -106,7 +106,10 @@ void bind_settings(nb::module_& m) {
         .def_rw("keep_energy", &Settings::keep_energy)
         .def_rw("overlap_correction", &Settings::overlap_correction)
         .def_rw("joint_passes", &Settings::joint_passes)
-        .def_rw("continuous", &Settings::continuous);
+        .def_rw("continuous", &Settings::continuous)
+        .def_rw("contact_patches", &Settings::contact_patches)
+        .def_rw("patch_reactions", &Settings::patch_reactions)
+        .def_rw("exact_symmetric", &Settings::exact_symmetric);
     nb::list stages;
     for (const char* name : STAGE_NAMES) {
         stages.append(name);

@@ -224,6 +224,46 @@ int collide_core_with_mesh(const Geometry& geo, int gc, const Pose& pc, int gf, 
     return found + interior;
 }
 
+// The part [t0, t1] of a core over the face of box geom gf (half extents `half`) nearest to
+// its point at t, the core's least phi: the face along the axis on which that point lies
+// furthest outside the box, the core clipped to the slabs of the two others. A capsule lying
+// across a face narrower than itself touches it along a segment, not at a point: the clipped
+// segment's ends (within margin) are its contacts, as box-box clipping gives a face's
+// corners. One point at the minimum (its place along a flat minimum is arbitrary) let a
+// plank lying across two round bars rock and creep on it (0.5 mm in 5 s); a slightly tilted
+// face has its minimum at one edge and the other edge within the margin. False when the
+// point is not outside the box or the clipped part is empty (then t0 >= t1).
+bool core_over_face(Vec3 half, const CoreEnds& ends, double t, double& t0, double& t1) {
+    const Vec3 a = ends.a, d = sub(ends.b, ends.a);
+    const double s = 0.5 * (t + 1.0);
+    const Vec3 p = {a.x + s * d.x, a.y + s * d.y, a.z + s * d.z};
+    int face = 0;
+    for (int c = 1; c < 3; ++c) {
+        face = std::fabs(p[c]) - half[c] > std::fabs(p[face]) - half[face] ? c : face;
+    }
+    if (!(std::fabs(p[face]) > half[face])) {
+        return false;  // the core's deepest point inside the box: no face to clip against
+    }
+    double s0 = 0.0, s1 = 1.0;
+    for (int c = 0; c < 3; ++c) {
+        if (c == face) {
+            continue;
+        }
+        if (d[c] == 0.0) {
+            if (std::fabs(a[c]) > half[c]) {
+                return false;  // parallel to the slab, outside it
+            }
+            continue;
+        }
+        const double e0 = (-half[c] - a[c]) / d[c], e1 = (half[c] - a[c]) / d[c];
+        s0 = std::max(s0, std::min(e0, e1));
+        s1 = std::min(s1, std::max(e0, e1));
+    }
+    t0 = 2.0 * s0 - 1.0;
+    t1 = 2.0 * s1 - 1.0;
+    return t1 > t0;
+}
+
 }  // namespace
 
 int collide_cores(const Geometry& geo, int ga, const Pose& pa, int gb, const Pose& pb,
@@ -271,9 +311,26 @@ int collide_core_with_field(const Geometry& geo, int gc, const Pose& pc, int gf,
         return found;
     }
     double t, phi;
-    core_minimum(geo, gf, core_in_geom_frame(geo, gc, pc, gf, pf), reach, -1.0, 1.0, t, phi);
-    if (phi < std::min(lo.phi, hi.phi) - CORE_MINIMUM_TOLERANCE && phi < reach) {
-        found += core_contact(geo, gc, pc, gf, pf, t, sign, margin, out, index + found);
+    const CoreEnds ends = core_in_geom_frame(geo, gc, pc, gf, pf);
+    core_minimum(geo, gf, ends, reach, -1.0, 1.0, t, phi);
+    if (!(phi < std::min(lo.phi, hi.phi) - CORE_MINIMUM_TOLERANCE && phi < reach)) {
+        return found;
+    }
+    // the clipped segment, stretched to the minimum where that lies beyond the face's edge
+    // (the core crosses the edge: the minimum is the deepest point there): its ends inside
+    // the core (its own ends are written already), or the minimum alone
+    double t0 = t, t1 = t;
+    const bool over = core_over_face(geo.geom_size[gf], ends, t, t0, t1);
+    t0 = std::min(t0, t);
+    t1 = std::max(t1, t);
+    if (!over || (t0 <= -1.0 && t1 >= 1.0) || t1 - t0 <= CORE_MINIMUM_TOLERANCE) {
+        return found + core_contact(geo, gc, pc, gf, pf, t, sign, margin, out, index + found);
+    }
+    if (t0 > -1.0) {
+        found += core_contact(geo, gc, pc, gf, pf, t0, sign, margin, out, index + found);
+    }
+    if (t1 < 1.0) {
+        found += core_contact(geo, gc, pc, gf, pf, t1, sign, margin, out, index + found);
     }
     return found;
 }

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "solver/continuous.h"
+#include "solver/integrate.h"
 
 namespace rg {
 
@@ -18,7 +19,21 @@ constexpr double REDETECT_DRIFT = SPECULATIVE_MARGIN - GRAPH_MARGIN;
 // pair in every pass.
 double bound(Vec3 v) { return std::fabs(v.x) + std::fabs(v.y) + std::fabs(v.z); }
 
-// Body i's predicted displacement over dt (m) and turn (rad): what predict_pose applies.
+// Dynamic body i's orientation after dt free of torque (integrate.h's turned): with
+// Settings::exact_symmetric a symmetric body's exact motion, which its rotation update takes
+// (a fast top predicted by omega dt was struck on the floor where its tip was not), else the
+// turn by omega dt.
+Quat predicted_orientation(const StepContext& w, int i, double dt) {
+    if (!w.settings->exact_symmetric) {
+        return rotate_by_angular_velocity(w.bodies.orientation[i], w.bodies.angular_velocity[i],
+                                          dt);
+    }
+    return turned(w.bodies.orientation[i], w.bodies.rotation[i], w.bodies.angular_momentum[i],
+                  w.bodies.angular_velocity[i], w.model.inverse_moments[i], dt);
+}
+
+// Body i's predicted displacement over dt (m) and turn (rad): what predict_pose applies (a
+// symmetric body's turn: the rotation vector of its exact motion's).
 Travel predicted_motion(const StepContext& w, int i, double dt, Vec3 lookahead) {
     const int32_t motion = w.model.motion[i];
     if (motion == STATIC) {
@@ -26,7 +41,13 @@ Travel predicted_motion(const StepContext& w, int i, double dt, Vec3 lookahead) 
     }
     const Vec3 v = w.bodies.velocity[i];
     const Vec3 la = motion == DYNAMIC ? lookahead : Vec3{0.0, 0.0, 0.0};
-    return {{la.x + dt * v.x, la.y + dt * v.y, la.z + dt * v.z}, scale(dt, w.bodies.angular_velocity[i])};
+    const Vec3 shift = {la.x + dt * v.x, la.y + dt * v.y, la.z + dt * v.z};
+    if (motion == DYNAMIC && w.settings->exact_symmetric &&
+        symmetry_axis(w.model.inverse_moments[i]) >= 0) {
+        const Quat q = w.bodies.orientation[i];
+        return {shift, turn_between(q, predicted_orientation(w, i, dt))};
+    }
+    return {shift, scale(dt, w.bodies.angular_velocity[i])};
 }
 
 // Body i's pose after dt at its current velocity; dynamic bodies also move by lookahead (m):
@@ -42,7 +63,8 @@ Pose predict_pose(const StepContext& w, int i, double dt, Vec3 lookahead) {
     if (motion != STATIC) {
         const Vec3 v = w.bodies.velocity[i];
         x = {x.x + dt * v.x, x.y + dt * v.y, x.z + dt * v.z};
-        q = rotate_by_angular_velocity(q, w.bodies.angular_velocity[i], dt);
+        q = motion == DYNAMIC ? predicted_orientation(w, i, dt)
+                              : rotate_by_angular_velocity(q, w.bodies.angular_velocity[i], dt);
     }
     return {x, rotation_from_quaternion(q)};
 }

@@ -89,6 +89,51 @@ Quat restore_energy(Quat q, const Mat3& r, Vec3 l, Vec3 inverse_moments, double 
 
 }  // namespace
 
+int symmetry_axis(Vec3 inverse_moments) {
+    const double x = inverse_moments.x, y = inverse_moments.y, z = inverse_moments.z;
+    if (x == y && y != z) {
+        return 2;
+    }
+    if (y == z && z != x) {
+        return 0;
+    }
+    return x == z && x != y ? 1 : -1;
+}
+
+Quat symmetric_rotation(Quat q, const Mat3& r, Vec3 l, Vec3 inverse_moments, int axis, double h) {
+    const double equal = inverse_moments[(axis + 1) % 3];  // 1 / I1
+    const double size = length(l);
+    if (size == 0.0) {
+        return q;
+    }
+    const double turn = 0.5 * size * equal * h;  // half angles
+    const double spin = 0.5 * (inverse_moments[axis] - equal) * rotate_inverse(r, l)[axis] * h;
+    const double st = std::sin(turn) / size, ss = std::sin(spin);
+    const Quat world = {std::cos(turn), st * l.x, st * l.y, st * l.z};
+    const Quat body = {std::cos(spin), axis == 0 ? ss : 0.0, axis == 1 ? ss : 0.0,
+                       axis == 2 ? ss : 0.0};
+    return normalize(multiply(multiply(world, q), body));
+}
+
+Quat turned(Quat q, const Mat3& r, Vec3 l, Vec3 omega, Vec3 inverse_moments, double h) {
+    const int axis = symmetry_axis(inverse_moments);
+    return axis >= 0 ? symmetric_rotation(q, r, l, inverse_moments, axis, h)
+                     : rotate_by_angular_velocity(q, omega, h);
+}
+
+Vec3 turn_between(Quat from, Quat to) {
+    Quat d = multiply(to, {from.w, -from.x, -from.y, -from.z});
+    if (d.w < 0.0) {
+        d = {-d.w, -d.x, -d.y, -d.z};
+    }
+    const double s = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    if (s == 0.0) {
+        return {0.0, 0.0, 0.0};
+    }
+    const double angle = 2.0 * std::atan2(s, d.w);
+    return {angle * d.x / s, angle * d.y / s, angle * d.z / s};
+}
+
 int rotation_substeps(double speed, double dt) {
     const double turns = std::ceil(speed * dt / QUARTER_TURN);
     // compared as a double: a huge (or NaN) speed must not reach the conversion to int
@@ -139,7 +184,8 @@ void update_velocities(const BodyStates& bodies, const BodyModel& model, double 
 }
 
 void update_positions(const BodyStates& bodies, const BodyModel& model, double dt, int order,
-                      bool keep_energy, Span<const int64_t> acting, Span<const uint8_t> asleep) {
+                      bool keep_energy, bool exact_symmetric, Span<const int64_t> acting,
+                      Span<const uint8_t> asleep) {
     for (int64_t i = 0; i < bodies.position.size; ++i) {
         if (model.motion[i] == STATIC || (asleep.size > 0 && asleep[i])) {
             continue;
@@ -160,6 +206,13 @@ void update_positions(const BodyStates& bodies, const BodyModel& model, double d
         const Vec3 l = bodies.angular_momentum[i];
         const Vec3 tau = free ? bodies.torque[i] : Vec3{0.0, 0.0, 0.0};
         const Vec3 inverse_moments = model.inverse_moments[i];
+        const int axis = exact_symmetric ? symmetry_axis(inverse_moments) : -1;
+        if (axis >= 0 && tau.x == 0.0 && tau.y == 0.0 && tau.z == 0.0) {
+            q = symmetric_rotation(q, r, l, inverse_moments, axis, dt);
+            r = rotation_from_quaternion(q);
+            bodies.angular_velocity[i] = apply_inverse_inertia(r, inverse_moments, l);
+            continue;
+        }
         const double speed = std::sqrt(w.x * w.x + w.y * w.y + w.z * w.z);
         const int substeps = rotation_substeps(speed, dt);
         const double h = dt / substeps;

@@ -30,6 +30,28 @@ namespace rg {
 
 constexpr int MAX_ROTATION_SUBSTEPS = 64;
 
+// The body axis (0, 1, 2) about which a body with exactly two equal principal moments is
+// symmetric (the third moment differs), or -1 (all three equal, or none).
+int symmetry_axis(Vec3 inverse_moments);
+
+// The exact torque-free motion over h (s) of a body symmetric about body axis `axis`, at
+// orientation q (rotation r) with world angular momentum l: a turn about l by |l| h / I1
+// (world side) and a spin about the symmetry axis by (1/I3 - 1/I1) L3 h (body side), I1 the
+// two equal moments, I3 the axis's, L3 = l along the axis (constant). omega = l / I1 +
+// (1/I3 - 1/I1) L3 e3 is exactly the sum of the two turns' rates, and the axis e3 only turns
+// with the first, so this is the motion for any h: |L| and the energy are kept exactly, where
+// Buss's updates, expansions in omega h, are unstable for a fast flat top (I3 near 2 I1) once
+// |omega| h > ~0.4 (a top spinning on its tip gained 74% energy in 1 s at |omega| h = 1.25).
+Quat symmetric_rotation(Quat q, const Mat3& r, Vec3 l, Vec3 inverse_moments, int axis, double h);
+
+// q advanced over h (s) free of torque, as the contact stages predict a dynamic body's pose:
+// symmetric_rotation for a symmetric body (l: its world angular momentum), else the turn by
+// omega h (rad/s world; exact for a sphere's constant omega, first order otherwise).
+Quat turned(Quat q, const Mat3& r, Vec3 l, Vec3 omega, Vec3 inverse_moments, double h);
+
+// The rotation vector (axis times angle, rad, world frame, angle in [0, pi]) of to from^-1.
+Vec3 turn_between(Quat from, Quat to);
+
 // Sub-steps of the rotation update for angular speed |omega| (rad/s) over dt (s).
 int rotation_substeps(double speed, double dt);
 
@@ -63,8 +85,11 @@ void update_velocities(const BodyStates& bodies, const BodyModel& model, double 
 // Bodies with asleep[i] set (sleep.h; asleep empty without sleeping) are left as they are:
 // their velocities are the last step's final ones, which moved them nowhere (the step is a
 // fixed point for them), so updating them would give the same bits.
+// exact_symmetric: a symmetric body (symmetry_axis) with no torque in the update turns by
+// symmetric_rotation instead (SolverConfig.exact_symmetric).
 void update_positions(const BodyStates& bodies, const BodyModel& model, double dt, int order,
-                      bool keep_energy, Span<const int64_t> acting, Span<const uint8_t> asleep);
+                      bool keep_energy, bool exact_symmetric, Span<const int64_t> acting,
+                      Span<const uint8_t> asleep);
 
 // Put every attached body at its offset from its parent, moving with the parent's velocity
 // and not turning.

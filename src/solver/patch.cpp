@@ -541,13 +541,13 @@ bool short_of_target(const PairLevers& pair, const LeverReach& lever, const Cont
 }
 
 // The static wrench: j (3) and a moment along every constrained rotation reaching the targets,
-// applied if it pushes (j_n > 0) and keeps the step's total through the patch (prior + j)
-// inside the friction cone, its spin moment inside mu j_n rho and its centre of pressure
+// applied if it pushes (j_n > 0; with lessen, if prior + j does) and keeps the step's total
+// through the patch (prior + j) inside the friction cone, its spin moment inside mu j_n rho and its centre of pressure
 // inside the patch. Returns APPLIED or UNRESOLVED (it would pull), or nothing where it is not
 // taken (a singular system, or a wrench that would slide): the sliding wrench is next.
 std::optional<PatchResult> static_wrench(const PairLevers& pair, const ContactSet& set, int64_t seed, int64_t count,
                           const PatchFrame& f, const Matrix6& big, const Targets& target, double mu,
-                          Vec3 prior) {
+                          Vec3 prior, bool lessen) {
     const Vec3 n = f.n, v = f.v;
     Matrix6 system;
     double rhs[6], sol[6];
@@ -565,16 +565,16 @@ std::optional<PatchResult> static_wrench(const PairLevers& pair, const ContactSe
     const Vec3 j = {sol[0], sol[1], sol[2]};
     const Vec3 mo = moment(f.d, sol, 3, f.tips + 1);
     const double mn = dot(mo, n);
-    if (dot(j, n) <= 0.0) {
-        return PatchResult{UNRESOLVED, {0.0, 0.0, 0.0}};
-    }
     // Coulomb on the step's total through this patch
     const Vec3 total = add(prior, j);
     const double fn = dot(total, n);
+    if (!(lessen ? fn > 0.0 : dot(j, n) > 0.0)) {
+        return PatchResult{UNRESOLVED, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, false};
+    }
     if (length(sub(total, scale(fn, n))) <= mu * fn && std::fabs(mn) <= mu * fn * f.rho &&
         pressure_inside(set, seed, count, f.c, n, sub(mo, scale(mn, n)), fn)) {
         apply_pair(pair.bodies, pair.model, pair.a, pair.b, pair.movable, j, mo, f.ra, f.rb);
-        return PatchResult{APPLIED, j};
+        return PatchResult{APPLIED, j, mo, false};
     }
     return std::nullopt;
 }
@@ -584,10 +584,10 @@ std::optional<PatchResult> static_wrench(const PairLevers& pair, const ContactSe
 // frictionless wrench: the tip constraints can turn the sliding round (a block pushed at its
 // top rocks its base backwards before they stop the rocking), and friction must oppose the
 // sliding that is left, not the one before (then it pointed forwards in the push's first
-// step).
+// step). With lessen it may press less than nothing where prior + j still presses.
 PatchResult sliding_wrench(const PairLevers& pair, const ContactSet& set, int64_t seed,
                            int64_t count, const PatchFrame& f, const Matrix6& big,
-                           const Targets& target, double mu, Vec3 prior) {
+                           const Targets& target, double mu, Vec3 prior, bool lessen) {
     const Vec3 n = f.n;
     Vec3 u = sub(f.v, scale(f.vn, n));
     double jn;
@@ -605,13 +605,14 @@ PatchResult sliding_wrench(const PairLevers& pair, const ContactSet& set, int64_
     if (friction > 0.0) {
         s = {n.x - friction * u.x / ut, n.y - friction * u.y / ut, n.z - friction * u.z / ut};
     }
-    if (!solve_sliding(big, f.d, f.tips, s, n, target, f.vn, f.w, jn, mo) || jn <= 0.0) {
-        return {UNRESOLVED, {0.0, 0.0, 0.0}};
+    const PatchResult unresolved = {UNRESOLVED, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, false};
+    if (!solve_sliding(big, f.d, f.tips, s, n, target, f.vn, f.w, jn, mo)) {
+        return unresolved;
     }
     // summed in this order (jn first): the rounding is the step's
     const double fn = jn + prior.x * n.x + prior.y * n.y + prior.z * n.z;
-    if (!pressure_inside(set, seed, count, f.c, n, mo, fn)) {
-        return {UNRESOLVED, {0.0, 0.0, 0.0}};
+    if (!(lessen ? fn > 0.0 : jn > 0.0) || !pressure_inside(set, seed, count, f.c, n, mo, fn)) {
+        return unresolved;
     }
     const Vec3 j = scale(jn, s);
     if (mu > 0.0) {
@@ -620,25 +621,26 @@ PatchResult sliding_wrench(const PairLevers& pair, const ContactSet& set, int64_
     } else {
         apply_pair(pair.bodies, pair.model, pair.a, pair.b, pair.movable, j, mo, f.ra, f.rb);
     }
-    return {APPLIED, j};
+    return {APPLIED, j, mo, mu > 0.0};
 }
 
 }  // namespace
 
 PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int a, int b,
                           Movable movable, const ContactSet& set, int64_t seed, int64_t count,
-                          double e, double mu, Vec3 prior, double dt) {
+                          double e, double mu, Vec3 prior, double dt, bool lessen) {
+    const PatchResult at_rest = {AT_REST, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, false};
     PatchFrame f;
     if (!patch_frame(bodies, a, b, set, seed, count, f)) {
-        return {UNRESOLVED, {0.0, 0.0, 0.0}};
+        return {UNRESOLVED, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, false};
     }
     if (patch_at_rest(f)) {
-        return {AT_REST, {0.0, 0.0, 0.0}};  // nothing to do
+        return at_rest;  // nothing to do
     }
     const PairLevers pair = {bodies, model, a, b, movable, set.centre_a[seed], set.centre_b[seed]};
     const LeverReach lever = lever_reach(pair, set, seed, count, f.n, dt);
     if (!short_of_target(pair, lever, set, seed, count, f, e, dt)) {
-        return {AT_REST, {0.0, 0.0, 0.0}};
+        return at_rest;
     }
     Matrix6 big = {};
     if (movable.a) {
@@ -650,11 +652,11 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
     const Targets target = normal_targets(pair, lever, set, seed, count, f.c, f.n, f.t1, f.t2,
                                           f.edge, f.tips, f.d, f.vn, f.w, e, dt);
     if (mu > 0.0) {
-        if (const auto held = static_wrench(pair, set, seed, count, f, big, target, mu, prior)) {
+        if (const auto held = static_wrench(pair, set, seed, count, f, big, target, mu, prior, lessen)) {
             return *held;
         }
     }
-    return sliding_wrench(pair, set, seed, count, f, big, target, mu, prior);
+    return sliding_wrench(pair, set, seed, count, f, big, target, mu, prior, lessen);
 }
 
 }  // namespace rg

@@ -66,6 +66,9 @@ enum PatchOutcome { APPLIED, AT_REST, UNRESOLVED };
 struct PatchResult {
     PatchOutcome outcome;
     Vec3 impulse;  // the linear impulse applied to a, N s
+    Vec3 moment;   // the angular impulse applied to a besides impulse at the patch's centroid
+                   // (its part about n without torsional friction), N m s
+    bool sliding;  // friction at its Coulomb limit (the sliding wrench with mu > 0)
 };
 
 // Which bodies of a pair take impulses: false treats one as infinite mass (kinematic, static,
@@ -82,9 +85,13 @@ struct Movable {
 // edge, or a patch that holding would pull (j_n <= 0: a tumbling box whose edge strikes with
 // one end while the other lifts), which the caller treats with a single impulse on the
 // approaching points (none approaching: nothing to do).
+// lessen: the wrench may press less than nothing (j_n < 0) where the step's total through the
+// patch, prior + j, still presses (impulses accumulated over the step, clamped as a whole):
+// a pure moment that stops a body tipping on its support, which friction's reaction passed
+// on by shock propagation gives it (solver.h), needs j_n = 0 and got none otherwise.
 PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int a, int b,
                           Movable movable, const ContactSet& set, int64_t seed, int64_t count,
-                          double e, double mu, Vec3 prior, double dt);
+                          double e, double mu, Vec3 prior, double dt, bool lessen);
 
 // (V_a + w_a x r_a) - (V_b + w_b x r_b).
 Vec3 relative_point_velocity(const BodyStates& bodies, int a, int b, Vec3 ra, Vec3 rb);

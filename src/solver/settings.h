@@ -18,6 +18,12 @@ struct Settings {
     double overlap_correction = 1.0;  // overlap.h: fraction of excess overlap removed per step
     int joint_passes = 20;            // joints.h: rounds of each joint solve; 0: joint stages off
     bool continuous = true;           // continuous.h: pairs that move far in a step found at impact
+    bool contact_patches = true;      // solver.h: patch wrenches between movable bodies, and a
+                                      //   body held by immovable ones against all of them at once
+    bool patch_reactions = true;      // solver.h: shock impulses booked to pairs by the lever
+                                      //   rule, friction's reaction passed to dynamic supports
+    bool exact_symmetric = true;      // integrate.h: a symmetric body free of torque turns by its
+                                      //   exact motion (symmetric_rotation), predicted so too
 };
 
 }  // namespace rg

@@ -8,6 +8,10 @@
 // non-approaching at the predicted poses, as long as the graph ordered every pair the levels'
 // impulses bring into contact; a step whose levels brought apart bodies together builds the
 // graph again from the new velocities and resolves the levels again (brought_together).
+// A frozen support takes no impulse; with Settings::patch_reactions the sliding friction a
+// body gets against a frozen dynamic support is held back as the support's reaction, applied
+// once the levels are done, and the levels are resolved again (solver.h), so friction
+// between bodies keeps momentum.
 #include <algorithm>
 
 #include "solver/contacts.h"
@@ -28,6 +32,12 @@ constexpr Vec3 NO_LOOKAHEAD = {0.0, 0.0, 0.0};
 // first 0.3 s of the pile of 1000 (scenes.pile, seed 0) a second round ran in 16 of the 116
 // shock stages, a third in none; a settled scene needs one.
 constexpr int SHOCK_ROUNDS = 3;
+
+// Times the levels are resolved again in one round for the frictional reactions passed on to
+// frozen supports (propagate_world_shock). A block sliding on a block needs one; a support
+// that friction's reaction turns against its own frictional support, and a body on it that
+// follows, a few; what the last leaves is the next step's.
+constexpr int REACTION_ROUNDS = 4;
 
 // m: pairs this close at the predicted poses are ordered by the graph (graph.touching). The
 // levels' impulses change velocities by up to metres per second in an impact (a body sinking
@@ -78,8 +88,10 @@ int64_t build_contact_graph(StepContext& w, int64_t pairs, double dt) {
 // One body (graph node `node`) of the level being processed against all its frozen supports
 // at once: their contacts (normals turned towards the body) go into w.wide and are resolved
 // as patches, so a box straddling two frozen boxes is held by both (one support alone could
-// hold it only with its centre of pressure on an edge).
-int resolve_supported_body(StepContext& w, int64_t node, int64_t current, double dt) {
+// hold it only with its centre of pressure on an edge). *reactions counts the frictional
+// reactions passed on to frozen dynamic supports (resolve_patches).
+int resolve_supported_body(StepContext& w, int64_t node, int64_t current, double dt,
+                           int* reactions) {
     const Graph& graph = w.graph;
     const ContactSet& wide = w.wide;
     const int body = static_cast<int>(graph.nodes[node]);
@@ -100,23 +112,30 @@ int resolve_supported_body(StepContext& w, int64_t node, int64_t current, double
         }
         count += found;
     }
-    return applied + resolve_patches(w, body, {true, false}, wide, count, dt, SHOCK, 0.0);
+    return applied +
+           resolve_patches(w, body, {true, false}, wide, count, dt, SHOCK, 0.0, reactions);
 }
 
 // resolve_supported_body for nodes by_level[start:end] of level `current`; impulses applied.
-int resolve_level_supports(StepContext& w, int64_t start, int64_t end, int64_t current, double dt) {
+int resolve_level_supports(StepContext& w, int64_t start, int64_t end, int64_t current, double dt,
+                           int* reactions) {
     int applied = 0;
     for (int64_t s = start; s < end; ++s) {
-        applied += resolve_supported_body(w, w.graph.by_level[s], current, dt);
+        applied += resolve_supported_body(w, w.graph.by_level[s], current, dt, reactions);
     }
     return applied;
 }
 
-// The levels of the m nodes in order, each against its frozen supports, then its inside
-// pairs (see top).
-void resolve_levels(StepContext& w, int64_t m, double dt) {
+// The levels of the m nodes in order from level `lowest` up, each against its frozen supports,
+// then its inside pairs (see top); returns how many frictional reactions were passed on to
+// frozen supports.
+int resolve_levels(StepContext& w, int64_t m, double dt, int64_t lowest) {
     const Graph& graph = w.graph;
+    int reactions = 0;
     int64_t start = 0;
+    while (start < m && graph.level[graph.by_level[start]] < lowest) {
+        start += 1;  // levels below every body that moved: as they were left
+    }
     while (start < m) {
         const int64_t current = graph.level[graph.by_level[start]];
         int64_t end = start;
@@ -126,7 +145,7 @@ void resolve_levels(StepContext& w, int64_t m, double dt) {
         if (current > 0) {
             for (int sweep = 0; sweep < w.settings->shock_sweeps; ++sweep) {
                 // each body of the level against all its frozen supports at once
-                int applied = resolve_level_supports(w, start, end, current, dt);
+                int applied = resolve_level_supports(w, start, end, current, dt, &reactions);
                 // then the pairs inside the level, both bodies movable
                 int inside = 0;
                 for (int64_t s = graph.level_pair_start[current];
@@ -138,7 +157,8 @@ void resolve_levels(StepContext& w, int64_t m, double dt) {
                 // the level moving into a frozen one (a box pressed sideways by its neighbour
                 // into a wall sank into it, 3 mm in 1 s, when the sweep ended on their pair)
                 if (inside > 0) {
-                    applied += inside + resolve_level_supports(w, start, end, current, dt);
+                    applied +=
+                        inside + resolve_level_supports(w, start, end, current, dt, &reactions);
                 }
                 if (applied == 0) {
                     break;  // another sweep would find the same state and do nothing too
@@ -147,6 +167,28 @@ void resolve_levels(StepContext& w, int64_t m, double dt) {
         }
         start = end;
     }
+    return reactions;
+}
+
+// Apply the reactions held back in w.reaction (solver.h) to their bodies and clear them;
+// returns the lowest level of a body that took one (the levels below it are unchanged).
+int64_t apply_reactions(StepContext& w) {
+    const int n = w.num_bodies();
+    const BodyStates& s = w.bodies;
+    int64_t lowest = w.graph.level.size;
+    for (int i = 0; i < n; ++i) {
+        const Vec3 p = w.reaction[i], l = w.reaction[n + i];
+        if (p.x == 0.0 && p.y == 0.0 && p.z == 0.0 && l.x == 0.0 && l.y == 0.0 && l.z == 0.0) {
+            continue;
+        }
+        s.velocity[i] = add(s.velocity[i], scale(w.model.inverse_mass[i], p));
+        s.angular_momentum[i] = add(s.angular_momentum[i], l);
+        s.angular_velocity[i] = rotate(s.inverse_inertia[i], s.angular_momentum[i]);
+        w.reaction[i] = {0.0, 0.0, 0.0};
+        w.reaction[n + i] = {0.0, 0.0, 0.0};
+        lowest = std::min(lowest, w.graph.level[w.graph.node_of[i]]);
+    }
+    return lowest;
 }
 
 // Did the levels' impulses bring a pair into contact that was apart when the graph was
@@ -173,7 +215,16 @@ void propagate_world_shock(StepContext& w, int64_t pairs, double dt) {
         contact_levels(graph, w.model.motion, edges, m);
         pairs_by_body(graph, w.lists, pairs, m);
         pairs_by_level(graph, w.lists, pairs, m);
-        resolve_levels(w, m, dt);
+        // friction's reactions passed on to frozen supports (Settings::patch_reactions) move
+        // them against their own supports: the levels are resolved again from the ground up
+        // while any were passed on (a block sliding on a block on a frictionless floor: once)
+        int reactions = resolve_levels(w, m, dt, 0);
+        for (int again = 0; reactions > 0 && again < REACTION_ROUNDS; ++again) {
+            reactions = resolve_levels(w, m, dt, apply_reactions(w));
+        }
+        if (reactions > 0) {
+            apply_reactions(w);  // what the last round passed on: the next step's to settle
+        }
         if (!brought_together(w, pairs, dt)) {
             break;
         }

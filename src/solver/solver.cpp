@@ -18,6 +18,9 @@ constexpr double CONTACT_RESTITUTION_START = -0.9;
 constexpr double SAME_MOTION = 1e-9;
 // Contacts of a pair whose normals agree within this cosine form one patch (one impulse).
 constexpr double PATCH_COS = 0.95;
+// A patch's spread along a direction below this fraction of its largest is no spread: its
+// points lie on a line (an edge), across which pressures are not determined.
+constexpr double PRESSURE_SPAN = 1e-6;
 
 // v_a - v_b at contact i's point, each body's lever arm taken from its predicted centre.
 Vec3 relative_velocity(const StepContext& w, const ContactSet& set, int a, int b, int64_t i) {
@@ -113,6 +116,161 @@ void record_impulse(const StepContext& w, const ContactSet& set, int64_t seed, V
     total = add(total, scale(set.orient[seed], j));
 }
 
+// The geometric centroid of patch seed's points (the point its patch wrench acts at).
+Vec3 patch_centroid(const ContactSet& set, int64_t seed, int64_t count) {
+    Vec3 c = {0.0, 0.0, 0.0};
+    int k = 0;
+    for (int64_t i = seed; i < count; ++i) {
+        if (set.group[i] == seed) {
+            c = add(c, set.point[i]);
+            k += 1;
+        }
+    }
+    return scale(1.0 / k, c);
+}
+
+// Normal pressure impulses over a patch's k points: p(x) = j_n / k + beta . (x - centroid).
+struct Pressures {
+    double jn;  // N s; 0: not determined (the caller books the impulse whole)
+    Vec3 beta;  // N s / m, in the patch's plane
+    Vec3 centroid;
+    Vec3 n;     // the patch's mean normal
+    int k;
+
+    double at(Vec3 x) const { return jn / k + dot(beta, sub(x, centroid)); }
+};
+
+// The pressures over patch seed's points that make its wrench: j at c plus the angular
+// impulse m, along the patch's mean normal n (its part of j). The linear distribution has
+// the total j_n and, for beta solved in the patch's plane, m's tip part as its moment about c:
+// sum (x_i - c) x p_i n = m - (m . n) n. For an edge only beta along it is determined (the
+// part across it is the least-squares choice, 0). Two knife edges get the lever rule. jn = 0
+// when j does not press (j_n <= 0) or the patch has one point.
+Pressures patch_pressures(const ContactSet& set, int64_t seed, int64_t count, Vec3 c, Vec3 j,
+                          Vec3 m) {
+    Pressures out = {0.0, {0.0, 0.0, 0.0}, patch_centroid(set, seed, count), {0.0, 0.0, 0.0}, 0};
+    Vec3 n = {0.0, 0.0, 0.0};
+    for (int64_t i = seed; i < count; ++i) {
+        if (set.group[i] == seed) {
+            n = add(n, set.normal[i]);
+            out.k += 1;
+        }
+    }
+    const double norm = length(n);
+    if (out.k < 2 || norm == 0.0) {
+        return out;
+    }
+    n = scale(1.0 / norm, n);
+    const double jn = dot(j, n);
+    if (!(jn > 0.0)) {
+        return out;
+    }
+    // the moment the pressures' spread must make about the centroid: m's tip part about c,
+    // less that of j_n n moved from c to the centroid
+    const Vec3 tip = sub(m, scale(dot(m, n), n));
+    const Vec3 spread = sub(tip, cross(sub(out.centroid, c), scale(jn, n)));
+    const Vec3 target = cross(n, spread);  // S beta = target, S = sum q q^T over the plane
+    const Vec3 a = std::fabs(n.x) < 0.57735 ? Vec3{1.0, 0.0, 0.0} : Vec3{0.0, 1.0, 0.0};
+    const Vec3 t1 = scale(1.0 / length(cross(a, n)), cross(a, n)), t2 = cross(n, t1);
+    double suu = 0.0, suv = 0.0, svv = 0.0;
+    for (int64_t i = seed; i < count; ++i) {
+        if (set.group[i] == seed) {
+            const Vec3 q = sub(set.point[i], out.centroid);
+            const double u = dot(q, t1), v = dot(q, t2);
+            suu += u * u;
+            suv += u * v;
+            svv += v * v;
+        }
+    }
+    // beta by the eigenvectors of S in the plane, leaving out a direction it does not span
+    const double mean = 0.5 * (suu + svv), half = 0.5 * (suu - svv);
+    const double radius = std::sqrt(half * half + suv * suv);
+    const double angle = 0.5 * std::atan2(2.0 * suv, suu - svv);
+    const double ca = std::cos(angle), sa = std::sin(angle);
+    const Vec3 e[2] = {add(scale(ca, t1), scale(sa, t2)), sub(scale(ca, t2), scale(sa, t1))};
+    const double lambda[2] = {mean + radius, mean - radius};
+    for (int r = 0; r < 2; ++r) {
+        if (lambda[r] > PRESSURE_SPAN * lambda[0]) {
+            out.beta = add(out.beta, scale(dot(e[r], target) / lambda[r], e[r]));
+        }
+    }
+    out.jn = jn;
+    out.n = n;
+    return out;
+}
+
+// The reaction across gravity of a sliding patch: the part of `share` (an impulse on the
+// resolved body at point x) off the up axis, held back reversed in w.reaction for contact i's
+// partner when that is a dynamic body held frozen by shock propagation (else it took its
+// share already, or takes none); shock.cpp applies it once the levels are done. Applied at
+// once, the supports would move under the bodies still to be resolved on them, which then
+// followed them and were left moving when the next round stopped the supports (a box on two
+// boxes rose off them). Along gravity the frozen support takes nothing (what keeps a stack
+// from sinking: the ground takes it in the end); across it nothing else would: friction, and
+// the normal impulse of a support tilted by the friction it took (a block pulled on a
+// frictionless floor, the block on it sliding, lost 5e-4 of F T at dt = 1/60 with the
+// normal's part off). Returns 1 if applied, else 0.
+int react(const StepContext& w, const ContactSet& set, int64_t i, Vec3 x, Vec3 share) {
+    const int partner = static_cast<int>(set.partner[i]);
+    if (w.model.motion[partner] != DYNAMIC) {
+        return 0;
+    }
+    const Vec3 up = w.up;
+    const Vec3 t = sub(share, scale(dot(share, up), up));
+    const int n = w.num_bodies();
+    w.reaction[partner] = sub(w.reaction[partner], t);
+    w.reaction[n + partner] = sub(w.reaction[n + partner], cross(sub(x, set.centre_b[i]), t));
+    return 1;
+}
+
+// Add the patch's impulse j (on its body; with the angular impulse m, applied at c) to the
+// step totals of its pairs. A patch of several pairs (a body on two frozen supports, shock.cpp)
+// with Settings::patch_reactions splits j by the pressures of patch_pressures (its normal
+// part point by point, its tangential part in proportion to the pressing points' pressures),
+// so each pair's total is the reaction its support gives; otherwise the whole of j goes to
+// the seed contact's pair. frozen (shock propagation's sliding patches against frozen
+// bodies, with patch_reactions): friction's reaction goes to each dynamic partner too, point
+// by point by the same shares (react); *reactions counts them. Static friction's reaction is not passed on: with the normal
+// impulse held back it tips the support, which the bodies on it then hold tilted (a cube
+// dropped on a cube came to rest 0.015 deg off level); nor is torsional friction's.
+void book_impulse(const StepContext& w, const ContactSet& set, int64_t seed, int64_t count, Vec3 c,
+                  Vec3 j, Vec3 m, bool frozen, int* reactions) {
+    const bool split = w.settings->patch_reactions;
+    bool several = false;
+    for (int64_t i = seed; i < count && split && !several; ++i) {
+        several = set.group[i] == seed && set.source[i] != set.source[seed];
+    }
+    const Pressures p = several && split ? patch_pressures(set, seed, count, c, j, m)
+                                         : Pressures{0.0, {}, {}, {}, 0};
+    const bool passed_on = frozen && split && reactions != nullptr;
+    if (p.jn == 0.0) {
+        record_impulse(w, set, seed, j);
+        if (passed_on) {
+            *reactions += react(w, set, seed, c, j);
+        }
+        return;
+    }
+    // the normal part by the pressures, the tangential part (friction) by the pressing ones:
+    // a moment's pressures (large and of both signs where j_n is small) would scale it up
+    const Vec3 tangential = sub(j, scale(p.jn, p.n));
+    double pressing = 0.0;
+    for (int64_t i = seed; i < count; ++i) {
+        pressing += set.group[i] == seed ? std::max(p.at(set.point[i]), 0.0) : 0.0;
+    }
+    for (int64_t i = seed; i < count; ++i) {
+        if (set.group[i] == seed) {
+            const double pi = p.at(set.point[i]);
+            const Vec3 share =
+                add(scale(pi, p.n), scale(std::max(pi, 0.0) / pressing, tangential));
+            Vec3& total = w.pair_impulse[set.source[i]];
+            total = add(total, scale(set.orient[i], share));
+            if (passed_on) {
+                *reactions += react(w, set, i, set.point[i], share);
+            }
+        }
+    }
+}
+
 // The most negative restitution patch seed may take in the contact and shock stages so that
 // it still closes the gap it starts the step with (speculative contact, closable in patch.h):
 // the patch may keep approaching at gap / dt, gap being its points' least separation at the
@@ -147,6 +305,53 @@ double restitution_for(const StepContext& w, int a, int b, ImpulseMode mode, dou
 bool alone(const StepContext& w, int a, int b) {
     return (w.model.motion[a] != DYNAMIC || w.pairs_of[a] == 1) &&
            (w.model.motion[b] != DYNAMIC || w.pairs_of[b] == 1);
+}
+
+// The first of the pairs of body a = pair k's a when a is held by immovable bodies alone:
+// dynamic, in two or more pairs, all with static or kinematic partners; -1 otherwise (or
+// without Settings::contact_patches). Pairs are listed sorted by (a, b) (broad_phase.h) and
+// a dynamic body is the a of its pairs with static and kinematic bodies, so a held body's
+// pairs (w.pairs_of of them) follow each other from the first.
+int64_t held_start(const StepContext& w, int64_t k, int64_t pairs) {
+    const int a = w.lists.pair_a[k];
+    if (!w.settings->contact_patches || w.model.motion[a] != DYNAMIC || w.pairs_of[a] < 2) {
+        return -1;
+    }
+    int64_t start = k;
+    while (start > 0 && w.lists.pair_a[start - 1] == a) {
+        start -= 1;
+    }
+    const int64_t end = start + w.pairs_of[a];
+    if (end > pairs) {
+        return -1;
+    }
+    for (int64_t j = start; j < end; ++j) {
+        if (w.lists.pair_a[j] != a || w.model.motion[w.lists.pair_b[j]] == DYNAMIC) {
+            return -1;
+        }
+    }
+    return start;
+}
+
+// The contact stage's resolve of a held body (held_start): all its contacts at once, in
+// w.wide, at e = 0, as shock propagation resolves a body against its frozen supports. Pair
+// by pair, a plank on two bars was pushed up at one bar by the impulse that stopped it at
+// the other, and rocked for good (3e-5 m/s): the two patches' impulses disturb each other.
+int resolve_held(StepContext& w, int64_t start, double dt) {
+    const int a = w.lists.pair_a[start];
+    const ContactSet& wide = w.wide;
+    int64_t count = 0;
+    int applied = 0;
+    for (int64_t k = start; k < start + w.pairs_of[a]; ++k) {
+        const int64_t found = gather_pair(w, {k, a, 0.0}, dt, {0.0, 0.0, 0.0}, wide, count);
+        if (count + found > wide.depth.size) {
+            // no room to combine it: resolve this pair on its own rather than drop it
+            applied += resolve_pair(w, k, dt, {0.0, 0.0, 0.0}, CONTACT, 0.0, {true, false});
+            continue;
+        }
+        count += found;
+    }
+    return applied + resolve_patches(w, a, {true, false}, wide, count, dt, CONTACT, 0.0);
 }
 
 // w.pairs_of over the first `pairs` listed pairs; acting_only: those with an impulse.
@@ -198,7 +403,8 @@ int resolve_pair(StepContext& w, int64_t k, double dt, Vec3 lookahead, ImpulseMo
 // over the whole step: the patch wrench is checked with what its pairs already transmitted
 // this step added, and every impulse applied is added there.
 int resolve_patches(StepContext& w, int a, Movable movable, const ContactSet& set, int64_t count,
-                    double dt, ImpulseMode mode, double ramp_e) {
+                    double dt, ImpulseMode mode, double ramp_e, int* reactions) {
+    const bool frozen = mode == SHOCK && !movable.b;
     if (count == 0) {
         return 0;
     }
@@ -238,12 +444,15 @@ int resolve_patches(StepContext& w, int a, Movable movable, const ContactSet& se
             }
             single_e = std::min(e, closing);
         }
-        if (mode != COLLISION && !movable.b) {
+        if (mode != COLLISION && (!movable.b || w.settings->contact_patches)) {
             const Vec3 prior = prior_impulse(w, set, seed, count);
             const PatchResult result =
-                resolve_patch(s, model, a, b, movable, set, seed, count, e, mu, prior, dt);
+                resolve_patch(s, model, a, b, movable, set, seed, count, e, mu, prior, dt,
+                              w.settings->patch_reactions && mode == SHOCK);
             if (result.outcome == APPLIED) {
-                record_impulse(w, set, seed, result.impulse);
+                book_impulse(w, set, seed, count, patch_centroid(set, seed, count),
+                             result.impulse, result.moment,
+                             frozen && result.sliding, reactions);
                 applied += 1;
                 continue;
             }
@@ -276,7 +485,7 @@ int resolve_patches(StepContext& w, int a, Movable movable, const ContactSet& se
         } else {
             apply_pair(s, model, a, b, movable, j, {0.0, 0.0, 0.0}, ra, rb);
         }
-        record_impulse(w, set, seed, j);
+        book_impulse(w, set, seed, count, c, j, {0.0, 0.0, 0.0}, false, reactions);
         applied += 1;
     }
     return applied;
@@ -295,7 +504,12 @@ void resolve_world_contacts(StepContext& w, int64_t pairs, double dt, ImpulseMod
             int applied = 0;
             for (int64_t k = 0; k < pairs; ++k) {
                 const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
-                if (ramp && alone(w, a, b) != (group == 1)) {
+                const int64_t held = ramp ? held_start(w, k, pairs) : -1;
+                if (ramp && (alone(w, a, b) || held >= 0) != (group == 1)) {
+                    continue;
+                }
+                if (held >= 0) {  // the whole body at its first pair
+                    applied += held == k ? resolve_held(w, k, dt) : 0;
                     continue;
                 }
                 applied += resolve_pair(w, k, dt, lookahead, mode, ramp_e,

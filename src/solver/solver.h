@@ -17,10 +17,12 @@
 //   (infinite mass). Leftover approach can then only push upper bodies: a stack cannot sink.
 //
 // Within a pair, contacts are grouped into patches of similar normal, each resolved at once
-// (resolve_patches): against an immovable partner by the wrench of patch.h, otherwise by one
-// impulse at its centroid. Shock propagation combines a body's contacts with all its frozen
-// supports into such patches. Coulomb's limit applies to each pair's impulse over the whole
-// step (StepContext::pair_impulse).
+// (resolve_patches): against an immovable partner by the wrench of patch.h, and against a
+// movable one too with Settings::contact_patches, otherwise by one impulse at its centroid;
+// with contact_patches the contact stage resolves a body touching only static and kinematic
+// bodies against all of them at once. Shock propagation combines a body's contacts with all
+// its frozen supports into such patches. Coulomb's limit applies to each pair's impulse over
+// the whole step (StepContext::pair_impulse).
 #pragma once
 
 #include "solver/patch.h"
@@ -65,7 +67,11 @@ int resolve_pair(StepContext& w, int64_t k, double dt, Vec3 lookahead, ImpulseMo
 
 // Resolve body a's contacts in `set` (normals towards a; each against the body set.partner[i])
 // in stage `mode`; returns the number of impulses applied (solver.cpp says how).
+// reactions (shock propagation's resolves against frozen bodies): where given, with
+// Settings::patch_reactions, the sliding friction applied against a frozen dynamic partner is
+// held back for it reversed (w.reaction), and *reactions counts how often (the caller applies
+// them and resolves the levels again).
 int resolve_patches(StepContext& w, int a, Movable movable, const ContactSet& set, int64_t count,
-                    double dt, ImpulseMode mode, double ramp_e);
+                    double dt, ImpulseMode mode, double ramp_e, int* reactions = nullptr);
 
 }  // namespace rg

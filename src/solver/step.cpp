@@ -278,7 +278,7 @@ Flow position_update(StepContext& w) {
     if (joints_on(w)) {
         count_joints_of_bodies(w);
     }
-    update_positions(w.bodies, w.model, w.dt, c.rotation_order, c.keep_energy,
+    update_positions(w.bodies, w.model, w.dt, c.rotation_order, c.keep_energy, c.exact_symmetric,
                      {w.pairs_of.data, w.pairs_of.size}, asleep_bodies(w));
     for (int i = 0; i < w.num_bodies(); ++i) {
         w.bodies.force[i] = {0.0, 0.0, 0.0};

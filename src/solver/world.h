@@ -139,7 +139,9 @@ struct ContactCache {
     X(Vec3, start, 3 * n, Vec3{})   /* velocity, angular momentum and angular velocity when */ \
                                     /* the impulse stages began (restored to rerun them) */    \
     X(int64_t, pairs_of, n, 0)      /* in how many listed pairs each body is */               \
-    X(Vec3, overlap_shift, n, Vec3{}) /* m, overlap.h's position corrections */
+    X(Vec3, overlap_shift, n, Vec3{}) /* m, overlap.h's position corrections */               \
+    X(Vec3, reaction, 2 * n, Vec3{}) /* N s, N m s: shock propagation's reactions held back */ \
+                                     /* (solver.h), linear then angular, 0 between rounds */
 
 // One world's step: its rows of every buffer, the step's dt and the stages it runs (Box2D's
 // b2StepContext). Batch::world makes one for each world a call steps.
