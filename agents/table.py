@@ -44,8 +44,10 @@ PACE = {
 the three seeds in agents/results of env_steps / wall_s (evaluations, and making the
 demonstrations, included), two runs at a time on the 2-core Intel Xeon VM."""
 ONE_THREAD = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
-              "XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"}
-"""The environment of every run: one thread for PyTorch, numpy's BLAS and JAX."""
+              "XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1",
+              "RIGID_GYM_NUM_THREADS": "1"}
+"""The environment of every run: one thread for PyTorch, numpy's BLAS, JAX and the solver's
+batch (whose pool would otherwise share large batches over the cores)."""
 
 
 def plan(tasks: list[str], algos: list[str] | None, seeds: list[int], runs: Path,
