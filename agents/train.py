@@ -503,7 +503,8 @@ class EveryNSteps(BaseCallback):
 
 class SuccessEvaluation(EveryNSteps):
     """Every ``every`` env steps, and at the end of training, evaluate the deterministic policy
-    on fixed seeds and append (timesteps, success_rate, mean_return, wall_seconds of the run)
+    on fixed seeds from VALIDATION_SEED (the final evaluation's seeds are touched only by
+    ``finish``) and append (timesteps, success_rate, mean_return, wall_seconds of the run)
     to ``path``; ``append``: keep the rows already there (a resumed run); ``progress``: draw
     a bar of each evaluation's episodes."""
 
@@ -526,7 +527,8 @@ class SuccessEvaluation(EveryNSteps):
             self.act()
 
     def act(self) -> None:
-        result = success_rate(self.model, self.env, self.episodes, progress=self.progress)
+        result = success_rate(self.model, self.env, self.episodes, VALIDATION_SEED,
+                              progress=self.progress)
         row = [self.num_timesteps, result["success_rate"], result["mean_return"],
                self.clock.seconds()["wall_seconds"]]
         with open(self.path, "a", newline="") as f:
