@@ -107,3 +107,20 @@ def test_bad_settings_are_refused():
         BatchPPO("MlpPolicy", envs)
     with pytest.raises(ValueError, match="batch learner trains ppo only"):
         train("rigid_gym/Push-v0", algo="sac", learner="batch", timesteps=10)
+
+
+def test_advantages_are_gae_cut_at_the_episodes_ends():
+    envs = gym.make_vec("rigid_gym/Push-v0", num_envs=1)
+    model = BatchPPO("MultiInputPolicy", envs, n_steps=16, batch_size=16, gamma=0.5,
+                     gae_lambda=0.5)
+    # one copy, three steps; the episode ends at the second (its bootstrap, if truncated,
+    # is already in that step's reward), so the third's value does not reach back past it
+    buffers = {"rewards": np.array([[1.0], [2.0], [4.0]], np.float32),
+               "values": np.array([[0.5], [1.0], [2.0]], np.float32),
+               "dones": np.array([[False], [True], [False]])}
+    last = np.array([8.0], np.float32)
+    d2 = 4.0 + 0.5 * 8.0 - 2.0          # step 3: delta, bootstrapped from the last value
+    d1 = 2.0 - 1.0                      # step 2: the end, no next value
+    d0 = 1.0 + 0.5 * 1.0 - 0.5          # step 1: next value 1.0, then GAE adds step 2's
+    expected = [d0 + 0.25 * d1, d1, d2]
+    np.testing.assert_allclose(model.advantages(buffers, last)[:, 0], expected)
