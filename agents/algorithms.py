@@ -9,9 +9,12 @@ callbacks, VecEnv, ``HerReplayBuffer``, ``.zip`` models):
   faster than PyTorch's on one core once several envs share a vector step
   (``benchmarks/learner.py`` times the settings).
 - ``sb3``: stable-baselines3 on PyTorch, what the ``train`` extra installs.
+- ``batch``: PPO only, ``rigid_gym.agents.batch_ppo``: JAX, reading the batched env's arrays
+  directly and updating in one jitted call per rollout, for hundreds of copies; it saves
+  stable-baselines3 PPO zips, which load as any SB3 PPO.
 
-``default_learner()`` is sbx where it imports, else sb3. PPO trains on SB3 either way: its
-pace is the env's (a gradient step per thousands of env steps), not the learner's.
+``default_learner()`` is sbx where it imports, else sb3. PPO trains on batch where JAX and
+optax import (SBX's PPO takes no Dict observations), else on sb3.
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from rigid_gym.checks import BadFile
 
 ALGORITHMS = ("sac", "tqc", "ppo", "bc_sac")
 """What ``rigid-gym train`` trains (hyperparams.yml's ``algo``)."""
-LEARNERS = ("sbx", "sb3")
+LEARNERS = ("sbx", "sb3", "batch")
 """The learners, fastest first (see the module docstring)."""
 SB3_PACKAGES = ("stable_baselines3", "sb3_contrib")
 """Where other algorithm classes (A2C, DDPG, ...) are looked up, by class name."""
@@ -38,6 +41,8 @@ def learner_available(name: str) -> bool:
         raise ValueError(f"train: learner must be one of {LEARNERS}, got {name!r}")
     if name == "sb3":
         return importlib.util.find_spec("stable_baselines3") is not None
+    if name == "batch":
+        return all(importlib.util.find_spec(m) is not None for m in ("jax", "optax"))
     return all(importlib.util.find_spec(m) is not None for m in ("sbx", "jax", "flax"))
 
 
@@ -47,19 +52,28 @@ def default_learner() -> str:
 
 
 def learner_for(algo: str, learner: str | None) -> str:
-    """The learner ``algo`` trains on: ``learner`` (None: ``default_learner()``), except that
-    ppo always trains on sb3; a ValueError if the one asked for is not installed."""
+    """The learner ``algo`` trains on: ``learner`` (None: ``default_learner()``, and for ppo
+    batch where it imports); ppo trains on batch or sb3 (sbx asked for: sb3), the others on
+    sbx or sb3. A ValueError if the one asked for is not installed or cannot train ``algo``."""
+    if learner is None and algo == "ppo" and learner_available("batch"):
+        return "batch"
     learner = learner or default_learner()
     if not learner_available(learner):
         raise ValueError(f"train: learner {learner!r} is not installed (pip install -e "
-                         "'.[fast]' for sbx); use --learner sb3")
-    return "sb3" if algo == "ppo" else learner
+                         "'.[fast]' for sbx and batch); use --learner sb3")
+    if learner == "batch" and algo != "ppo":
+        raise ValueError(f"train: the batch learner trains ppo only, not {algo!r}")
+    return "sb3" if algo == "ppo" and learner == "sbx" else learner
 
 
 def algorithm_class(name: str, learner: str = "sb3"):
     """The class for ``name`` on ``learner``: sac, tqc, ppo, or bc_sac (SAC with a
     behaviour-cloning loss on the demonstrations, ``rigid_gym.agents.bc_sac``); on sbx, SBX's
-    SAC and TQC and ``bc_sac.BCSACJax`` (ppo is SB3's, see ``learner_for``)."""
+    SAC and TQC and ``bc_sac.BCSACJax`` (ppo is SB3's, see ``learner_for``); on batch,
+    ``batch_ppo.BatchPPO``."""
+    if learner == "batch" and name == "ppo":
+        from .batch_ppo import BatchPPO
+        return BatchPPO
     if learner == "sbx" and name != "ppo":
         if name == "bc_sac":
             from .bc_sac import BCSACJax

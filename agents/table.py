@@ -36,16 +36,19 @@ PACE = {
     ("rigid_gym/Throw-v0", "sac"): 720,
     ("rigid_gym/Stack-v0", "bc_sac"): 113,
     ("rigid_gym/Stack-v0", "sac"): 329,
-    ("rigid_gym/Push-v0", "ppo"): 3409,
+    ("rigid_gym/Push-v0", "ppo"): 7759,
     ("rigid_gym/Throw-v0", "ppo"): 2064,
     ("rigid_gym/Stack-v0", "ppo"): 1814,
 }
 """Env steps per wall second of each recipe, for the dry run's estimates: the median over
 the three seeds in agents/results of env_steps / wall_s (evaluations, and making the
-demonstrations, included), two runs at a time on the 2-core Intel Xeon VM."""
+demonstrations, included), two runs at a time on the 2-core Intel Xeon VM (Push's PPO: one
+at a time, the machine shared with other work)."""
 ONE_THREAD = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
-              "XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1"}
-"""The environment of every run: one thread for PyTorch, numpy's BLAS and JAX."""
+              "XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1",
+              "RIGID_GYM_NUM_THREADS": "1"}
+"""The environment of every run: one thread for PyTorch, numpy's BLAS, JAX and the solver's
+batch (whose pool would otherwise share large batches over the cores)."""
 
 
 def plan(tasks: list[str], algos: list[str] | None, seeds: list[int], runs: Path,

@@ -110,10 +110,13 @@ def run_directory(out: str | Path, env_id: str, algo: str, seed: int) -> Path:
     return Path(out) / run_name(env_id, algo, seed)
 
 
-def make_env(env_id: str, n_envs: int, env_kwargs: dict | None = None):
-    """SB3's VecEnv of ``n_envs`` copies of ``env_id`` in one batched World (``SB3VecEnv``),
-    made with ``env_kwargs`` (e.g. reward_type), with episode statistics (VecMonitor) and a
-    check that fails where a NaN first appears."""
+def make_env(env_id: str, n_envs: int, env_kwargs: dict | None = None, learner: str = "sb3"):
+    """``n_envs`` copies of ``env_id`` in one batched World, made with ``env_kwargs`` (e.g.
+    reward_type): for the batch learner the vector env itself, its first episodes' ends
+    spread (``stagger``); else SB3's VecEnv of it (``SB3VecEnv``) with episode statistics
+    (VecMonitor) and a check that fails where a NaN first appears."""
+    if learner == "batch":
+        return gym.make_vec(env_id, num_envs=n_envs, stagger=True, **(env_kwargs or {}))
     venv = gym.make_vec(env_id, num_envs=n_envs, **(env_kwargs or {}))
     return VecCheckNan(VecMonitor(SB3VecEnv(venv)), raise_exception=True)
 
@@ -123,7 +126,7 @@ def build_model(env_id: str, settings: dict, algo: str, learner: str, n_envs: in
     """A new model of ``algo`` on ``learner`` (sbx or sb3) with ``settings`` (an entry of
     hyperparams.yml: its ``env_kwargs`` make the envs) and ``overrides`` of its arguments, on
     ``make_env``'s envs; returns (model, env)."""
-    env = make_env(env_id, n_envs, settings.get("env_kwargs"))
+    env = make_env(env_id, n_envs, settings.get("env_kwargs"), learner)
     model = algorithm_class(algo, learner)("MultiInputPolicy", env, seed=seed, verbose=verbose,
                                            **model_kwargs(settings, algo, overrides))
     return model, env
@@ -152,8 +155,8 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     """Train on ``env_id`` and return the run folder (see the module docstring).
 
     algo, timesteps (env steps), n_envs: override hyperparams.yml (an ``algo`` that the
-    entry's ``algos`` names brings that recipe's settings). learner: sbx or sb3 (None: sbx
-    where installed, ``algorithms.learner_for``). eval_freq: env steps between evaluations of
+    entry's ``algos`` names brings that recipe's settings). learner: sbx, sb3 or batch (None:
+    the entry's ``learner``, else ``algorithms.learner_for``'s choice). eval_freq: env steps between evaluations of
     ``eval_episodes`` deterministic episodes (None: CURVE_POINTS over the run; 0: none).
     final_episodes: the final evaluation's episodes (0: none, and no result file); results:
     a folder that also gets the result file, as ``<run_name>.json``. checkpoint_freq: env
@@ -176,7 +179,7 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
 
     settings = load_hyperparams(env_id, algo)
     algo = algo or settings["algo"]
-    learner = learner_for(algo, learner)
+    learner = learner_for(algo, learner or settings.get("learner"))
     algorithm_class(algo, learner)  # an unknown algo fails here, before anything is made
     timesteps = _count(timesteps if timesteps is not None else settings["n_timesteps"],
                        "timesteps", 1)
@@ -210,8 +213,9 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     # from here: making the model and the demonstrations count in the run's time
     clock = Clock(before.get("wall_seconds", 0.0), before.get("cpu_seconds", 0.0))
     if resume is not None:  # the checkpoint's model, with the settings it was made with
-        env = make_env(env_id, n_envs, record.get("env_kwargs"))
-        env.seed(seed)  # the envs start afresh, as at the run's start
+        env = make_env(env_id, n_envs, record.get("env_kwargs"), learner)
+        if learner != "batch":  # (the batch learner seeds its envs at its first rollout)
+            env.seed(seed)  # the envs start afresh, as at the run's start
         model = algorithm_class(algo, learner).load(Path(resume) / "model.zip", env=env,
                                                     device="cpu")
         load_buffers(model, Path(resume))
@@ -499,7 +503,8 @@ class EveryNSteps(BaseCallback):
 
 class SuccessEvaluation(EveryNSteps):
     """Every ``every`` env steps, and at the end of training, evaluate the deterministic policy
-    on fixed seeds and append (timesteps, success_rate, mean_return, wall_seconds of the run)
+    on fixed seeds from VALIDATION_SEED (the final evaluation's seeds are touched only by
+    ``finish``) and append (timesteps, success_rate, mean_return, wall_seconds of the run)
     to ``path``; ``append``: keep the rows already there (a resumed run); ``progress``: draw
     a bar of each evaluation's episodes."""
 
@@ -522,7 +527,8 @@ class SuccessEvaluation(EveryNSteps):
             self.act()
 
     def act(self) -> None:
-        result = success_rate(self.model, self.env, self.episodes, progress=self.progress)
+        result = success_rate(self.model, self.env, self.episodes, VALIDATION_SEED,
+                              progress=self.progress)
         row = [self.num_timesteps, result["success_rate"], result["mean_return"],
                self.clock.seconds()["wall_seconds"]]
         with open(self.path, "a", newline="") as f:

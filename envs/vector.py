@@ -11,7 +11,11 @@ single env reset with seed s + i plays (``tests/test_vector.py``).
 Autoreset is ``SAME_STEP``: an episode that ends is reset within the same ``step``, whose
 observation is then the new episode's first; the last one is in ``infos["final_obs"]`` and its
 info in ``infos["final_info"]`` (masks ``infos["_final_obs"]``, ``infos["_final_info"]``).
-Episodes are truncated after ``max_episode_steps`` (the id's, as ``gym.make`` does).
+Episodes are truncated after ``max_episode_steps`` (the id's, as ``gym.make`` does). With
+``stagger=True`` the first episodes after a ``reset`` are cut short at evenly spread lengths
+(copy i's after ``max_episode_steps - i * max_episode_steps // num_envs`` steps), so that the
+copies' episodes end on different steps from then on instead of all on the same one (an
+on-policy learner's rollouts then see every phase of the episodes at once).
 The worlds share their geometry, so cube sizes cannot be randomized per copy.
 """
 
@@ -44,8 +48,8 @@ from .tower import TowerEnv
 class RigidGymVectorEnv(VectorEnv):
     """``num_envs`` copies of ``env_class``'s task (a RigidGymEnv class) in one batched World.
 
-    kwargs: the task's constructor arguments (``render_mode`` must be None; ``randomize``
-    may not name ``size``).
+    stagger: spread the first episodes' ends (see the module docstring). kwargs: the task's
+    constructor arguments (``render_mode`` must be None; ``randomize`` may not name ``size``).
     """
 
     # Gymnasium's VectorEnv declares metadata as a class-level dict (read, never mutated); a
@@ -54,7 +58,7 @@ class RigidGymVectorEnv(VectorEnv):
         "autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
 
     def __init__(self, env_class: type[RigidGymEnv], num_envs: int, max_episode_steps: int,
-                 **kwargs):
+                 stagger: bool = False, **kwargs):
         name = f"{env_class.__name__} vector env"
         integer(num_envs, f"{name}: num_envs", 1)
         integer(max_episode_steps, f"{name}: max_episode_steps", 1)
@@ -80,6 +84,9 @@ class RigidGymVectorEnv(VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.elapsed = np.zeros(self.num_envs, dtype=np.int64)
+        self.first_elapsed = np.arange(self.num_envs) * self.max_episode_steps // self.num_envs \
+            if stagger else np.zeros(self.num_envs, dtype=np.int64)
+        """The steps counted as elapsed at a reset: 0, or spread with ``stagger``."""
         self.action_argument = f"{type(self).__name__}.step: actions"  # as errors name it
         self.saved: SavedStates[tuple] = SavedStates(type(self).__name__)
         """The states kept by ``save_state`` by id."""
@@ -104,7 +111,7 @@ class RigidGymVectorEnv(VectorEnv):
         rngs = [seeding.np_random(s)[0] if s is not None or rng is None else rng
                 for s, rng in zip(seeds, self.core.rngs)]
         outcome = self.core.reset(ALL, rngs)
-        self.elapsed[:] = 0
+        self.elapsed[:] = self.first_elapsed
         return outcome.observations, every_copy(outcome.successes)
 
     def step(self, actions):
@@ -173,9 +180,9 @@ def final_infos(num_envs: int, ended: np.ndarray, observations: dict,
 def vector_entry_point(env_class: type[RigidGymEnv], task: str):
     """The function ``gym.make_vec`` calls for ``env_class``'s ids; episodes last the task's
     registered length (``TASKS[task]`` env steps) unless ``max_episode_steps`` is given."""
-    def make(num_envs: int = 1, max_episode_steps: int = TASKS[task],
+    def make(num_envs: int = 1, max_episode_steps: int = TASKS[task], stagger: bool = False,
              **kwargs) -> RigidGymVectorEnv:
-        return RigidGymVectorEnv(env_class, num_envs, max_episode_steps, **kwargs)
+        return RigidGymVectorEnv(env_class, num_envs, max_episode_steps, stagger, **kwargs)
     return make
 
 

@@ -4,7 +4,7 @@
     rigid-gym record ENV_ID [--policy random|scripted|MODEL.zip] [--algo NAME] [--episodes N]
                      [--seed S] [--out DIR] [--run NAME] [--contacts]
     rigid-gym replay FILE [FILE ...] [--web]
-    rigid-gym train ENV_ID [--algo sac|tqc|ppo|bc_sac] [--learner auto|sbx|sb3] [--steps N]
+    rigid-gym train ENV_ID [--algo sac|tqc|ppo|bc_sac] [--learner auto|sbx|sb3|batch] [--steps N]
                     [--seed S] [--n-envs N] [--out DIR] [--eval-freq N] [--eval-episodes N]
                     [--final-episodes N] [--results DIR] [--checkpoint-freq N] [--resume]
                     [--demos N] [--demo-dataset ID] [--progress-bar]
@@ -394,9 +394,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--algo", choices=("sac", "tqc", "ppo", "bc_sac"), default=None,
                    help="default: the env's entry in agents/hyperparams.yml (another recipe of "
                         "the entry's `algos` brings its settings)")
-    p.add_argument("--learner", choices=("auto", "sbx", "sb3"), default="auto",
-                   help="sbx (JAX, the `fast` extra) or sb3 (PyTorch); auto: sbx where "
-                        "installed (ppo trains on sb3)")
+    p.add_argument("--learner", choices=("auto", "sbx", "sb3", "batch"), default="auto",
+                   help="sbx (JAX, the `fast` extra), sb3 (PyTorch) or batch (ppo only: JAX "
+                        "over the batched env); auto: hyperparams.yml's, else sbx where "
+                        "installed, ppo on batch")
     p.add_argument("--steps", type=bounded(int, 1, 10**9), default=None,
                    help="env steps, 1 to 1e9 (default: hyperparams.yml)")
     p.add_argument("--seed", type=bounded(int, 0, 2**32 - 1), default=0,
