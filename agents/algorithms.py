@@ -22,8 +22,9 @@ import json
 import zipfile
 from pathlib import Path
 
-ALGORITHMS = ("sac", "tqc", "ppo", "bc_sac")
-"""What ``rigid-gym train`` trains (hyperparams.yml's ``algo``)."""
+ALGORITHMS = ("sac", "tqc", "ppo", "bc_sac", "distill")
+"""What ``rigid-gym train`` trains (hyperparams.yml's ``algo``; distill is the pixel recipe,
+``rigid_gym.agents.distill``)."""
 LEARNERS = ("sbx", "sb3")
 """The learners, fastest first (see the module docstring)."""
 SB3_PACKAGES = ("stable_baselines3", "sb3_contrib")
@@ -57,7 +58,11 @@ def learner_for(algo: str, learner: str | None) -> str:
 def algorithm_class(name: str, learner: str = "sb3"):
     """The class for ``name`` on ``learner``: sac, tqc, ppo, or bc_sac (SAC with a
     behaviour-cloning loss on the demonstrations, ``rigid_gym.agents.bc_sac``); on sbx, SBX's
-    SAC and TQC and ``bc_sac.BCSACJax`` (ppo is SB3's, see ``learner_for``)."""
+    SAC and TQC and ``bc_sac.BCSACJax`` (ppo is SB3's, see ``learner_for``); distill: the
+    pixel student's loader (``distill.DistilledPolicy``, PyTorch whatever the learner)."""
+    if name == "distill":
+        from .distill import DistilledPolicy
+        return DistilledPolicy
     if learner == "sbx" and name != "ppo":
         if name == "bc_sac":
             from .bc_sac import BCSACJax
@@ -115,6 +120,8 @@ def algorithm_of(path: str | Path) -> str:
     try:
         with zipfile.ZipFile(path) as archive:
             data = json.loads(archive.read("data"))
+        if data.get("algo") == "distill":  # a pixel student (distill.save_policy)
+            return "distill"
         module = data["policy_class"]["__module__"].split(".")
         if module[0] == "sbx":
             return f"sbx:{module[1]}"
