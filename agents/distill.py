@@ -33,6 +33,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import shutil
 import sys
 import zipfile
 from pathlib import Path
@@ -204,6 +205,25 @@ def vector_success(policy, env_id: str, size: int, episodes: int, seed: int) -> 
     return float(success.mean())
 
 
+def select_student(folder: Path, curve: list[dict], iterations: int):
+    """The run's student, as ``train.finish`` chooses a checkpoint: among the students of the
+    iterations of the run's second half (``checkpoints/student_<i>.zip``, i >= SELECT_FROM *
+    iterations), the one of best validation success on the curve, the latest among equals,
+    copied to ``selected_model.zip``; without any, the last. Returns (DistilledPolicy, its
+    env steps)."""
+    from .train import SELECT_FROM
+
+    best, chosen = -1.0, None
+    for k, point in enumerate(curve[:iterations], start=1):
+        path = folder / "checkpoints" / f"student_{k}.zip"
+        if k >= SELECT_FROM * iterations and path.is_file() and point["success"] >= best:
+            best, chosen = point["success"], (path, point["env_steps"])
+    if chosen is None:
+        return DistilledPolicy.load(folder / "model.zip"), curve[-1]["env_steps"]
+    shutil.copy2(chosen[0], folder / "selected_model.zip")
+    return DistilledPolicy.load(chosen[0]), chosen[1]
+
+
 def teacher_seconds(teacher: Path) -> tuple[float, float]:
     """(wall, CPU) seconds of the teacher's training: its result file in agents/results
     (``<run_name>.json`` of the run named by the model's settings), else its json's."""
@@ -262,20 +282,22 @@ def train_distill(env_id: str, settings: dict, *, seed: int, folder: Path, resum
         rng.bit_generator.state = state["rng"]
         done_iterations, env_steps, curve = state["iterations"], state["env_steps"], state["curve"]
         clock = Clock(state["wall_seconds"], state["cpu_seconds"])
+        record = json.loads((folder / "run.json").read_text())
+        record["resumed_at"] = record.get("resumed_at", []) + [env_steps]
+        record["iterations"] = record["recipe"]["iterations"] = iterations
+        (folder / "run.json").write_text(json.dumps(record, indent=2))
         with open(folder / "evaluations.csv", "w", newline="") as f:
             writer = csv.writer(f)
             writer.writerow(["timesteps", "success_rate", "mean_return", "wall_seconds"])
             writer.writerows([p["env_steps"], p["success"], "", p["wall_s"]] for p in curve)
     else:
-        import shutil
-
         shutil.rmtree(checkpoints, ignore_errors=True)
         checkpoints.mkdir(parents=True)
         wall, cpu = teacher_seconds(teacher_path)
         clock = Clock(wall, cpu)
         record = {"env_id": env_id, "algo": ALGO, "learner": "torch", "seed": seed,
                   "obs_mode": "pixels", "env_kwargs": observation_kwargs(size),
-                  "teacher": str(teacher_path), "teacher_wall_seconds": wall,
+                  "teacher": str(teacher or recipe["teacher"]), "teacher_wall_seconds": wall,
                   "teacher_cpu_seconds": cpu, "iterations": iterations, "n_envs": n_envs,
                   "recipe": recipe, "command": " ".join(sys.argv),
                   "student_inputs": {"pixels": [size, size, 3],
@@ -357,6 +379,7 @@ def train_distill(env_id: str, settings: dict, *, seed: int, folder: Path, resum
         np.savez(checkpoints / f"data_{iteration}.npz", frames=chunk["frames"],
                  vectors=chunk["vectors"], labels=chunk["labels"], cubes=chunk["cubes"])
         save_policy(folder / "model.zip", network, config)
+        shutil.copy2(folder / "model.zip", checkpoints / f"student_{iteration + 1}.zip")
         torch.save({"network": network.state_dict(), "optimizer": optimizer.state_dict(),
                     "generator": generator.get_state(), "rng": rng.bit_generator.state,
                     "iterations": iteration + 1, "env_steps": env_steps, "curve": curve,
@@ -369,7 +392,10 @@ def train_distill(env_id: str, settings: dict, *, seed: int, folder: Path, resum
     (folder / "run.json").write_text(json.dumps(record, indent=2))
     if final_episodes:
         env = gym.make(env_id, **observation_kwargs(size))
-        final = success_rate(student, env, final_episodes, EVAL_SEED, progress=progress)
+        chosen, selected = select_student(folder, curve, iterations)
+        note(f"{env_id}: final evaluation, {final_episodes} episodes (the student of "
+             f"{selected:,} env steps)", progress)
+        final = success_rate(chosen, env, final_episodes, EVAL_SEED, progress=progress)
         seconds = clock.seconds()
         curve = curve + [{"env_steps": env_steps, "wall_s": round(seconds["wall_seconds"], 1),
                           "success": final["success_rate"]}]
@@ -377,7 +403,7 @@ def train_distill(env_id: str, settings: dict, *, seed: int, folder: Path, resum
             "env_id": env_id, "algo": ALGO, "seed": seed, "env_steps": env_steps,
             "wall_s": seconds["wall_seconds"], "cpu_s": seconds["cpu_seconds"],
             "episodes": final_episodes, "success": final["success_rate"],
-            "selected_env_steps": env_steps, "curve": curve, "learner": "torch",
+            "selected_env_steps": selected, "curve": curve, "learner": "torch",
             "method": f"pixels {size}x{size}: DAgger student of the SAC + HER state policy",
             "demo_env_steps": 0, "machine": machine(), "obs_mode": "pixels",
             "teacher_wall_s": record["teacher_wall_seconds"],

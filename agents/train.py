@@ -27,6 +27,11 @@ without its version, e.g. ``runs/Push-sac-seed0/``):
                         model.zip, run.json and evaluations.csv as they were then, and in the
                         newest one the replay buffer; ``train(resume=...)`` goes on from one
 
+``rigid-gym train ID --obs-mode pixels`` trains the entry's pixel recipe instead
+(``train_pixels``: a student on the frame, the goal and the pad's own state, distilled from a
+state policy on its own visited states, ``rigid_gym.agents.distill``, whose module docstring
+gives its run folder).
+
 Collection runs through the batched env (``SB3VecEnv`` over ``gym.make_vec``): n_envs copies
 in one World, one solver call per vector step.
 """

@@ -79,7 +79,7 @@ def test_the_pixel_recipe_trains_resumes_evaluates_and_records(tmp_path, capsys)
                    overrides=TINY, final_episodes=0)
     assert not (folder / "result.json").exists()
     assert sorted(p.name for p in (folder / "checkpoints").iterdir()) == [
-        "data_0.npz", "latest.pt"]
+        "data_0.npz", "latest.pt", "student_1.zip"]
     data = np.load(folder / "checkpoints" / "data_0.npz")
     assert data["frames"].shape == (100, 64, 64, 3) and data["frames"].dtype == np.uint8
     assert data["vectors"].shape == (100, 9) and data["labels"].shape == (100, 3)
@@ -90,10 +90,15 @@ def test_the_pixel_recipe_trains_resumes_evaluates_and_records(tmp_path, capsys)
     folder = train(PUSH, obs_mode="pixels", timesteps=200, out=out, eval_episodes=2,
                    overrides=TINY, final_episodes=2, results=results, resume=folder / "checkpoints")
     assert (folder / "checkpoints" / "data_1.npz").is_file()
+    resumed = json.loads((folder / "run.json").read_text())
+    assert resumed["resumed_at"] == [100] and resumed["iterations"] == 2
+    # the final evaluation's student: the second half's best on validation (both, here)
+    assert (folder / "selected_model.zip").is_file()
     saved = json.loads((results / f"{folder.name}.json").read_text())
     assert saved == json.loads((folder / "result.json").read_text())
     assert set(RESULT_KEYS) <= set(saved) and saved["obs_mode"] == "pixels"
     assert (saved["algo"], saved["env_steps"], saved["episodes"]) == ("distill", 200, 2)
+    assert saved["selected_env_steps"] in (100, 200)
     assert [p["env_steps"] for p in saved["curve"]] == [100, 200, 200]
     assert saved["wall_s"] > first["wall_seconds"] and saved["cpu_s"] > first["cpu_seconds"]
     # evaluate and record take it as they take the others
