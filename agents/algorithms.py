@@ -27,8 +27,9 @@ from pathlib import Path
 
 from rigid_gym.checks import BadFile
 
-ALGORITHMS = ("sac", "tqc", "ppo", "bc_sac")
-"""What ``rigid-gym train`` trains (hyperparams.yml's ``algo``)."""
+ALGORITHMS = ("sac", "tqc", "ppo", "bc_sac", "distill")
+"""What ``rigid-gym train`` trains (hyperparams.yml's ``algo``; distill is the pixel recipe,
+``rigid_gym.agents.distill``)."""
 LEARNERS = ("sbx", "sb3", "batch")
 """The learners, fastest first (see the module docstring)."""
 SB3_PACKAGES = ("stable_baselines3", "sb3_contrib")
@@ -70,7 +71,11 @@ def algorithm_class(name: str, learner: str = "sb3"):
     """The class for ``name`` on ``learner``: sac, tqc, ppo, or bc_sac (SAC with a
     behaviour-cloning loss on the demonstrations, ``rigid_gym.agents.bc_sac``); on sbx, SBX's
     SAC and TQC and ``bc_sac.BCSACJax`` (ppo is SB3's, see ``learner_for``); on batch,
-    ``batch_ppo.BatchPPO``."""
+    ``batch_ppo.BatchPPO``; distill: the pixel student's loader (``distill.DistilledPolicy``,
+    PyTorch whatever the learner)."""
+    if name == "distill":
+        from .distill import DistilledPolicy
+        return DistilledPolicy
     if learner == "batch" and name == "ppo":
         from .batch_ppo import BatchPPO
         return BatchPPO
@@ -131,6 +136,8 @@ def algorithm_of(path: str | Path) -> str:
     try:
         with zipfile.ZipFile(path) as archive:
             data = json.loads(archive.read("data"))
+        if data.get("algo") == "distill":  # a pixel student (distill.save_policy)
+            return "distill"
         module = data["policy_class"]["__module__"].split(".")
         if module[0] == "sbx":
             return f"sbx:{module[1]}"

@@ -16,6 +16,7 @@ beside ``<name>.zip`` (the committed models in agents/models/).
 from __future__ import annotations
 
 import json
+import shutil
 import zipfile
 from pathlib import Path
 
@@ -33,6 +34,9 @@ EVAL_SEED = 1_000_000
 VALIDATION_SEED = 3_000_000
 """Episodes that choose among a run's checkpoints (``train.finish``) use seeds from here: apart
 from training's, the demonstrations' (2,000,000 on) and the evaluation's."""
+OBSERVATION_OPTIONS = ("obs_mode", "width", "height", "camera", "goal_marker")
+"""The env arguments that shape what a policy observes: a pixel model's env is made with its
+settings' values of these (``observation_kwargs``)."""
 MODELS = Path(__file__).with_name("models")
 """The committed models: NAME.zip, with NAME.json (settings and ``evaluation``) beside each."""
 
@@ -100,6 +104,13 @@ def run_metadata(path: str | Path) -> dict:
     return {}
 
 
+def observation_kwargs(meta: dict) -> dict:
+    """The OBSERVATION_OPTIONS of a model's settings (``run_metadata``) ``env_kwargs``: what
+    its env must be made with for the model to see what it was trained on ({} for a state
+    model)."""
+    return {k: v for k, v in (meta.get("env_kwargs") or {}).items() if k in OBSERVATION_OPTIONS}
+
+
 def evaluate(model_path: str | Path, env_id: str | None = None, episodes: int = 100,
              seed: int = EVAL_SEED, algo: str | None = None, deterministic: bool = True,
              progress: bool = False) -> dict:
@@ -113,7 +124,7 @@ def evaluate(model_path: str | Path, env_id: str | None = None, episodes: int = 
     if env_id is None:
         raise ValueError(f"evaluate: no settings beside {model_path} (run.json in its folder, "
                          f"or {Path(model_path).with_suffix('.json').name}); pass the env id")
-    env = gym.make(env_id)
+    env = gym.make(env_id, **observation_kwargs(meta))
     model = load_model(model_path, env, algo or meta.get("algo"))
     result = success_rate(model, env, episodes, seed, deterministic, progress)
     return {"env_id": env_id, **result}
@@ -144,6 +155,9 @@ def commit_model(run: str | Path, name: str, episodes: int = 100) -> dict:
     meta = json.loads((run / "run.json").read_text())
     source = run / "selected_model.zip"
     source = source if source.is_file() else run / "model.zip"
+    if meta.get("algo") == "distill":  # a pixel student's zip holds its weights alone
+        shutil.copy2(source, MODELS / f"{name}.zip")
+        return finish_commit(run, name, meta, source, episodes)
     model = load_model(source, gym.make(meta["env_id"]), meta.get("algo"))
     for part in ("actor_state", "qf_state"):  # SBX: flax train states
         state = getattr(model.policy, part, None)
@@ -155,6 +169,12 @@ def commit_model(run: str | Path, name: str, episodes: int = 100) -> dict:
             optimizer.state.clear()
     model.save(MODELS / f"{name}.zip", exclude=["actor", "qf"] if meta.get("learner") == "sbx"
                else None)
+    return finish_commit(run, name, meta, source, episodes)
+
+
+def finish_commit(run: Path, name: str, meta: dict, source: Path, episodes: int) -> dict:
+    """``commit_model``'s end, once ``name``.zip is in place: its json from the run's
+    settings ``meta``, then ``record_evaluation``."""
     result = run / "result.json"
     if result.is_file():
         meta["selected_env_steps"] = json.loads(result.read_text())["selected_env_steps"]

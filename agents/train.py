@@ -27,6 +27,11 @@ without its version, e.g. ``runs/Push-sac-seed0/``):
                         model.zip, run.json and evaluations.csv as they were then, and in the
                         newest one the replay buffer; ``train(resume=...)`` goes on from one
 
+``rigid-gym train ID --obs-mode pixels`` trains the entry's pixel recipe instead
+(``train_pixels``: a student on the frame, the goal and the pad's own state, distilled from a
+state policy on its own visited states, ``rigid_gym.agents.distill``, whose module docstring
+gives its run folder).
+
 Collection runs through the batched env (``SB3VecEnv`` over ``gym.make_vec``): n_envs copies
 in one World, one solver call per vector step.
 """
@@ -151,7 +156,8 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
           resume: str | Path | None = None,
           on_checkpoint: Callable[[Path], None] | None = None, progress: bool = False,
           learner: str | None = None, final_episodes: int = 100,
-          results: str | Path | None = None) -> Path:
+          results: str | Path | None = None, obs_mode: str = "state",
+          teacher: str | None = None) -> Path:
     """Train on ``env_id`` and return the run folder (see the module docstring).
 
     algo, timesteps (env steps), n_envs: override hyperparams.yml (an ``algo`` that the
@@ -174,9 +180,25 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     progress: say on standard error what the run is doing (making the envs and the model,
     the demonstrations and each evaluation with a bar of their episodes); the training
     steps' own bar is ``progress_bar`` (SB3's).
+    obs_mode: "state", or "pixels": the pixel recipe (algo ``distill``,
+    ``rigid_gym.agents.distill``: a student on the frame, the goal and the pad's own state,
+    taught by the state policy ``teacher``, default the recipe's); ``timesteps`` then sets
+    its iterations (whole iterations of the recipe's episodes), ``overrides`` replace the
+    recipe's settings, ``resume`` is any true value (it goes on from checkpoints/latest.pt).
     """
     import torch
 
+    if obs_mode not in ("state", "pixels"):
+        raise ValueError(f"train: obs_mode must be 'state' or 'pixels', got {obs_mode!r}")
+    if obs_mode == "pixels" or algo == "distill":
+        if algo not in (None, "distill") or obs_mode != "pixels":
+            raise ValueError("train: the pixel recipe is algo 'distill' with obs_mode 'pixels' "
+                             f"(got algo {algo!r}, obs_mode {obs_mode!r})")
+        return train_pixels(env_id, timesteps=timesteps, seed=seed, out=out,
+                            eval_episodes=eval_episodes, threads=threads, overrides=overrides,
+                            resume=resume is not None and resume is not False,
+                            final_episodes=final_episodes, results=results, teacher=teacher,
+                            progress=progress)
     settings = load_hyperparams(env_id, algo)
     algo = algo or settings["algo"]
     learner = learner_for(algo, learner or settings.get("learner"))
@@ -251,6 +273,38 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     if final_episodes:
         finish(folder, model, clock, final_episodes, results, progress)
     return folder
+
+
+def train_pixels(env_id: str, *, timesteps: int | None, seed: int, out: str | Path,
+                 eval_episodes: int, threads: int, overrides: dict | None, resume: bool,
+                 final_episodes: int, results: str | Path | None, teacher: str | None,
+                 progress: bool) -> Path:
+    """``train``'s pixel recipe (``rigid_gym.agents.distill.train_distill``) with the entry's
+    ``distill`` settings, ``overrides`` replacing them; ``timesteps``: env steps, rounded up
+    to whole iterations."""
+    import torch
+
+    from .distill import ALGO, train_distill
+
+    settings = load_hyperparams(env_id, ALGO)
+    if "distill" not in settings:
+        raise ValueError(f"train: {env_id} has no pixel recipe (algos: distill) in "
+                         f"{HYPERPARAMS.name}")
+    recipe = {**settings["distill"], **(overrides or {})}
+    iterations = None
+    if timesteps is not None:
+        per_iteration = -(-recipe["episodes"] // recipe["n_envs"]) * recipe["n_envs"] \
+            * gym.spec(env_id).max_episode_steps
+        iterations = -(-_count(timesteps, "timesteps", 1) // per_iteration)
+    torch.set_num_threads(_count(threads, "threads", 1))
+    folder = run_directory(out, env_id, ALGO, _count(seed, "seed", 0))
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "result.json").unlink(missing_ok=True)  # a result only once the run finished
+    return train_distill(env_id, {**settings, "distill": recipe}, seed=seed, folder=folder,
+                         resume=resume, teacher=teacher, iterations=iterations,
+                         eval_episodes=_count(eval_episodes, "eval_episodes", 0),
+                         final_episodes=_count(final_episodes, "final_episodes", 0),
+                         results=results, progress=progress)
 
 
 def finish(folder: Path, model, clock: Clock, episodes: int = 100,

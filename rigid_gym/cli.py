@@ -127,7 +127,12 @@ def record(env_id: str, policy: str, algo: str | None, episodes: int, seed: int,
     from rigid_gym.agents.policies import make_policy
     from rigid_gym.recording import RecordRerun
 
-    env = RecordRerun(gym.make(env_id), out, episode_trigger=lambda k: True,
+    kwargs = {}
+    if policy.endswith(".zip"):  # a pixel model's env shows it what it was trained on
+        from rigid_gym.agents.evaluate import observation_kwargs, run_metadata
+
+        kwargs = observation_kwargs(run_metadata(policy))
+    env = RecordRerun(gym.make(env_id, **kwargs), out, episode_trigger=lambda k: True,
                       run=run or f"{policy_name(policy)}-seed{seed}", contacts=contacts)
     act = make_policy(env, policy, algo, seed)
     print(f"recording {episodes} episode(s) of {env_id}, policy {policy}, seed {seed}")
@@ -159,7 +164,10 @@ def train(args) -> int:
     from rigid_gym.agents.train import train as run_training
 
     resume = None
-    if args.resume:
+    if args.resume and args.obs_mode == "pixels":
+        # the pixel recipe goes on from its run folder's checkpoints/latest.pt
+        resume = run_directory(args.out, args.env_id, "distill", args.seed) / "checkpoints"
+    elif args.resume:
         folder = run_directory(args.out, args.env_id,
                                args.algo or load_hyperparams(args.env_id)["algo"], args.seed)
         resume = latest_checkpoint(folder)
@@ -175,7 +183,8 @@ def train(args) -> int:
                           demonstrations=args.demos, demo_dataset=args.demo_dataset,
                           resume=resume, progress=True,
                           learner=None if args.learner == "auto" else args.learner,
-                          final_episodes=args.final_episodes, results=args.results)
+                          final_episodes=args.final_episodes, results=args.results,
+                          obs_mode=args.obs_mode, teacher=args.teacher)
     print(f"trained {args.env_id}: {folder / 'model.zip'}")
     if args.final_episodes:
         import json
@@ -391,7 +400,13 @@ def build_parser() -> argparse.ArgumentParser:
                         "no display is found) instead of opening a window")
     p = commands.add_parser("train", help="train a stable-baselines3 baseline on an env")
     p.add_argument("env_id", type=env_id, help="e.g. rigid_gym/Push-v0")
-    p.add_argument("--algo", choices=("sac", "tqc", "ppo", "bc_sac"), default=None,
+    p.add_argument("--obs-mode", choices=("state", "pixels"), default="state",
+                   help="pixels: the pixel recipe (algo distill: a student on the frame, goal "
+                   "and pad state, taught on its own states by a state policy)")
+    p.add_argument("--teacher", metavar="MODEL", default=None,
+                   help="with --obs-mode pixels: the state policy that labels the student's "
+                   "states (default hyperparams.yml's)")
+    p.add_argument("--algo", choices=("sac", "tqc", "ppo", "bc_sac", "distill"), default=None,
                    help="default: the env's entry in agents/hyperparams.yml (another recipe of "
                         "the entry's `algos` brings its settings)")
     p.add_argument("--learner", choices=("auto", "sbx", "sb3", "batch"), default="auto",

@@ -196,7 +196,8 @@ def test_train_says_what_it_does_while_it_prepares_and_evaluates(tmp_path, capsy
 
 @pytest.mark.parametrize("name, env_id", [("push_sac_seed0", "rigid_gym/Push-v0"),
                                           ("stack_bcsac_seed0", "rigid_gym/Stack-v0"),
-                                          ("throw_sac_seed0", "rigid_gym/Throw-v0")])
+                                          ("throw_sac_seed0", "rigid_gym/Throw-v0"),
+                                          ("push_pixels_seed0", "rigid_gym/Push-v0")])
 def test_every_committed_model_is_evaluated_with_the_settings_beside_it(name, env_id, capsys):
     """agents/models/NAME.zip is read with NAME.json (its env id and algorithm: bc_sac for
     Stack), as the README runs them. The committed models were trained with SBX, which the

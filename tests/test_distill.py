@@ -1,0 +1,118 @@
+"""The pixel recipe (rigid_gym.agents.distill): what the student sees, and a tiny run that
+trains, saves, resumes, evaluates and records."""
+
+import json
+
+import gymnasium as gym
+import numpy as np
+import pytest
+import torch
+from rigid_gym.agents.distill import (
+    DistilledPolicy,
+    make_network,
+    observation_kwargs,
+    proprioception_index,
+    student_inputs,
+)
+from rigid_gym.agents.evaluate import evaluate
+from rigid_gym.agents.train import RESULT_KEYS, train
+
+from rigid_gym.cli import main
+
+PUSH = "rigid_gym/Push-v0"
+TINY = {"n_envs": 2, "episodes": 2, "updates": 3, "batch_size": 8, "beta_iterations": 2,
+        "network": {"channels": 4}}
+"""A recipe of one 100-step iteration and three updates: the loop, not the learning."""
+
+
+def student(size=64):
+    index = proprioception_index(PUSH)
+    config = {"size": size, "vector_size": 3 + len(index), "action_size": 3,
+              "proprioception_index": index.tolist(), "network": {"channels": 4}}
+    torch.manual_seed(0)
+    return DistilledPolicy(make_network(size, config["vector_size"], 3, channels=4), config)
+
+
+def test_the_student_sees_the_frame_the_goal_and_the_pad_never_the_cube():
+    env = gym.make(PUSH, **observation_kwargs(64))
+    obs, _ = env.reset(seed=3)
+    layout = env.unwrapped.task.observation_layout
+    index = proprioception_index(PUSH)
+    assert sorted(index.tolist()) == list(range(layout.slices["pad.position"].start,
+                                                layout.slices["pad.velocity"].stop))
+    frames, vector = student_inputs(obs, index)
+    assert frames.shape == (64, 64, 3) and frames.dtype == np.uint8
+    np.testing.assert_array_equal(vector, np.concatenate(
+        [obs["desired_goal"], obs["observation"][layout.slices["pad.position"]],
+         obs["observation"][layout.slices["pad.velocity"]]]).astype(np.float32))
+    policy = student()
+    action = policy.predict(obs)[0]
+    # every entry of the cube's state, and the achieved goal (its position), changed: the
+    # action is the same bit for bit
+    hidden = dict(obs, achieved_goal=obs["achieved_goal"] + 0.1,
+                  observation=obs["observation"].copy())
+    for name in ("cube0.position", "cube0.offset", "cube0.orientation", "cube0.velocity",
+                 "cube0.angular_velocity"):
+        hidden["observation"][layout.slices[name]] += 0.37
+    np.testing.assert_array_equal(policy.predict(hidden)[0], action)
+    # what it does see moves it: the frame, the goal, the pad
+    for changed in (dict(obs, pixels=255 - obs["pixels"]),
+                    dict(obs, desired_goal=obs["desired_goal"] + 0.1),
+                    dict(obs, observation=obs["observation"] + 0.1)):
+        assert not np.array_equal(policy.predict(changed)[0], action)
+
+
+def test_a_student_does_not_load_into_an_env_of_other_frames(tmp_path):
+    from rigid_gym.agents.distill import save_policy
+
+    policy = student()
+    save_policy(tmp_path / "model.zip", policy.network, policy.config)
+    DistilledPolicy.load(tmp_path / "model.zip", gym.make(PUSH, **observation_kwargs(64)))
+    for env in (gym.make(PUSH), gym.make(PUSH, **observation_kwargs(48))):
+        with pytest.raises(ValueError, match=r"takes state\+pixels observations of \(64, 64, 3\)"):
+            DistilledPolicy.load(tmp_path / "model.zip", env)
+
+
+def test_the_pixel_recipe_trains_resumes_evaluates_and_records(tmp_path, capsys):
+    out, results = tmp_path / "runs", tmp_path / "results"
+    folder = train(PUSH, obs_mode="pixels", timesteps=100, out=out, eval_episodes=2,
+                   overrides=TINY, final_episodes=0)
+    assert not (folder / "result.json").exists()
+    assert sorted(p.name for p in (folder / "checkpoints").iterdir()) == [
+        "data_0.npz", "latest.pt", "student_1.zip"]
+    data = np.load(folder / "checkpoints" / "data_0.npz")
+    assert data["frames"].shape == (100, 64, 64, 3) and data["frames"].dtype == np.uint8
+    assert data["vectors"].shape == (100, 9) and data["labels"].shape == (100, 3)
+    first = json.loads((folder / "run.json").read_text())
+    assert first["obs_mode"] == "pixels" and first["wall_seconds"] > first[
+        "teacher_wall_seconds"] > 0
+    # goes on to a second iteration from the checkpoint, the curve kept
+    folder = train(PUSH, obs_mode="pixels", timesteps=200, out=out, eval_episodes=2,
+                   overrides=TINY, final_episodes=2, results=results, resume=folder / "checkpoints")
+    assert (folder / "checkpoints" / "data_1.npz").is_file()
+    resumed = json.loads((folder / "run.json").read_text())
+    assert resumed["resumed_at"] == [100] and resumed["iterations"] == 2
+    # the final evaluation's student: the second half's best on validation (both, here)
+    assert (folder / "selected_model.zip").is_file()
+    saved = json.loads((results / f"{folder.name}.json").read_text())
+    assert saved == json.loads((folder / "result.json").read_text())
+    assert set(RESULT_KEYS) <= set(saved) and saved["obs_mode"] == "pixels"
+    assert (saved["algo"], saved["env_steps"], saved["episodes"]) == ("distill", 200, 2)
+    assert saved["selected_env_steps"] in (100, 200)
+    assert [p["env_steps"] for p in saved["curve"]] == [100, 200, 200]
+    assert saved["wall_s"] > first["wall_seconds"] and saved["cpu_s"] > first["cpu_seconds"]
+    # evaluate and record take it as they take the others
+    assert evaluate(folder / "model.zip", episodes=1)["episodes"] == 1
+    assert main(["record", PUSH, "--policy", str(folder / "model.zip"), "--out",
+                 str(tmp_path / "rec")]) == 0
+    assert list((tmp_path / "rec").rglob("*.rrd"))
+    assert "episode 0: 50 steps" in capsys.readouterr().out
+
+
+def test_the_pixel_recipe_is_distill_and_resumes_only_from_a_checkpoint(tmp_path):
+    with pytest.raises(ValueError, match="the pixel recipe is algo 'distill'"):
+        train(PUSH, obs_mode="pixels", algo="sac", out=tmp_path)
+    with pytest.raises(ValueError, match="obs_mode must be 'state' or 'pixels'"):
+        train(PUSH, obs_mode="rgb", out=tmp_path)
+    with pytest.raises(ValueError, match="--resume: no checkpoint"):
+        train(PUSH, obs_mode="pixels", out=tmp_path, overrides=TINY, resume=tmp_path / "x")
