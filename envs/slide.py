@@ -7,21 +7,11 @@ import functools
 import numpy as np
 
 from rigid_gym.meshes import prism_mesh
-from rigid_gym.recordable import Marker
 
 from .base import RigidGymEnv
 from .effector import PAD_HALF_EXTENTS, Workspace
-from .push import PUSHING, push_point, success_zone
-from .task import (
-    DISTANCE_THRESHOLD,
-    GOAL_COLOR,
-    MARKER_ALPHA,
-    Task,
-    closeness,
-    cube_anywhere,
-    distance,
-    staged,
-)
+from .push import PUSHING, Push, push_point
+from .task import closeness, distance, staged
 
 PUCK_FRICTION = 0.04
 """Coulomb coefficient of the puck and of the table (panda-gym's puck: 0.04): the pair's is
@@ -32,8 +22,6 @@ PUCK_RADIUS = 1.5
 panda-gym's; it is 0.04 m high (panda-gym's 0.03 m)."""
 PUCK_SIDES = 24
 """Sides of the prism that stands for the cylinder."""
-OBJECT_RANGE = 0.15
-"""m: the puck starts at x, y uniform in [-0.15, 0.15] (panda-gym's range)."""
 GOAL_X = (0.35, 0.55)
 """m: the target's x range: panda-gym's [0.25, 0.55] less the part that a push reaches ..."""
 GOAL_Y = (-0.15, 0.15)
@@ -55,13 +43,10 @@ def puck_shape(half: float):
     return prism_mesh(circle, -half, half)
 
 
-class Slide(Task):
-    """The puck starts anywhere in the range, the target beyond the pad's reach; reached
-    within DISTANCE_THRESHOLD."""
+class Slide(Push):
+    """Push's start, goal test and marker (the puck anywhere in x, y [-0.15, 0.15], panda-gym's
+    range; reached within DISTANCE_THRESHOLD), with the target beyond the pad's reach."""
 
-    num_cubes = 1
-    has_grip = False
-    goal_size = 3
     object_friction = PUCK_FRICTION
     table_friction = PUCK_FRICTION
     camera_view = ((0.1, -0.75, 0.6), (0.2, 0.0, 0.02), 40.0)
@@ -73,19 +58,10 @@ class Slide(Task):
     def object_shape(self, extents):
         return puck_shape(extents[2])
 
-    def place_cubes(self, rngs, half):
-        return cube_anywhere(rngs, half, OBJECT_RANGE)
-
     def sample_goals(self, rngs, starts, half, places):
         low, high = [GOAL_X[0], GOAL_Y[0]], [GOAL_X[1], GOAL_Y[1]]
         xy = np.array([rng.uniform(low, high) for rng in rngs])
         return np.concatenate([xy, half[:, :1]], axis=1)
-
-    def goal_reached(self, achieved_goal, desired_goal):
-        return distance(achieved_goal - desired_goal) < DISTANCE_THRESHOLD
-
-    def markers(self, goal, half):
-        return [Marker(success_zone(), (goal[0], goal[1], 0.0), GOAL_COLOR, MARKER_ALPHA)]
 
     def shaped(self, vectors, held, achieved_goal, desired_goal, half):
         layout = self.observation_layout
