@@ -468,6 +468,19 @@ void stabilize_component(StepContext& w, double dt, int64_t first, int64_t last)
     }
 }
 
+// Call fn(first, last) for each component of joints (rows [first, last) of joints.order)
+// whose bodies are awake, in component order.
+template <class Fn>
+void for_awake_components(const StepContext& w, Fn&& fn) {
+    const JointRows& joints = w.joints;
+    for (int64_t c = 0; c + 1 < joints.component_start.size; ++c) {
+        const int64_t first = joints.component_start[c], last = joints.component_start[c + 1];
+        if (!asleep(w, joints.order[first])) {
+            fn(first, last);
+        }
+    }
+}
+
 }  // namespace
 
 void count_joints_of_bodies(StepContext& w) {
@@ -513,22 +526,15 @@ void solve_joint_velocities(StepContext& w, double dt) {
             joints.accumulated[3 * j + c] = 0.0;
         }
     }
-    for (int64_t c = 0; c + 1 < joints.component_start.size; ++c) {
-        const int64_t first = joints.component_start[c], last = joints.component_start[c + 1];
-        if (!asleep(w, joints.order[first])) {
-            solve_velocity_rows(w, dt, true, first, last);
-        }
-    }
+    for_awake_components(w, [&](int64_t first, int64_t last) {
+        solve_velocity_rows(w, dt, true, first, last);
+    });
 }
 
 void project_joint_velocities(StepContext& w, double dt) {
-    const JointRows& joints = w.joints;
-    for (int64_t c = 0; c + 1 < joints.component_start.size; ++c) {
-        const int64_t first = joints.component_start[c], last = joints.component_start[c + 1];
-        if (!asleep(w, joints.order[first])) {
-            solve_velocity_rows(w, dt, false, first, last);
-        }
-    }
+    for_awake_components(w, [&](int64_t first, int64_t last) {
+        solve_velocity_rows(w, dt, false, first, last);
+    });
 }
 
 // Pre-stabilisation: Newton steps on the predicted poses over each awake component of joints
@@ -541,13 +547,9 @@ void project_joint_velocities(StepContext& w, double dt) {
 // in 12 s at dt = 1/240. The system is J(current) M^-1 J(current)^T, symmetric, so each step
 // is a contraction while the bodies turn little in a step.
 void stabilize_joint_positions(StepContext& w, double dt) {
-    const JointRows& joints = w.joints;
-    for (int64_t c = 0; c + 1 < joints.component_start.size; ++c) {
-        const int64_t first = joints.component_start[c], last = joints.component_start[c + 1];
-        if (!asleep(w, joints.order[first])) {
-            stabilize_component(w, dt, first, last);
-        }
-    }
+    for_awake_components(w, [&](int64_t first, int64_t last) {
+        stabilize_component(w, dt, first, last);
+    });
 }
 
 double joint_coordinate(const StepContext& w, int64_t j) {
