@@ -28,13 +28,15 @@ from rigid_gym.snapshots import SavedStates
 from .core import ALL, TaskBatch
 from .options import ARGUMENTS_TABLE, Options, checked_actions, refuse_unknown
 from .pixels import PixelOptions
-from .task import STEP_TIME, Task
+from .task import STEP_TIME, Task, with_effector
 
 if TYPE_CHECKING:
     from rigid_gym.render import Renderer
 
 ACTION_NAMES = ("x", "y", "z", "grip")
-"""The action entries: the pad's motion along x, y, z, and the grip."""
+"""The action entries: the pad's motion along x, y, z, and the grip (with
+``effector="gripper"``: the hand's motion and the fingers' command, ``GRIPPER_ACTION_NAMES``)."""
+GRIPPER_ACTION_NAMES = ("x", "y", "z", "fingers")
 ACTION_COLORS = ((0.86, 0.15, 0.15), (0.13, 0.63, 0.20), (0.15, 0.35, 0.90), (0.60, 0.25, 0.75))
 """Their plot colours: x red, y green, z blue (the axes' usual colours), grip purple."""
 REWARD_SERIES = Series("reward", ("reward",), ((0.93, 0.52, 0.10),))
@@ -67,9 +69,10 @@ class RigidGymEnv(gym.Env):
                  goal_marker: bool = True, render_width: int | None = None,
                  render_height: int | None = None, render_target_position=None,
                  render_distance: float | None = None, render_yaw: float | None = None,
-                 render_pitch: float | None = None, **unknown):
+                 render_pitch: float | None = None, effector: str = "pad", **unknown):
         name = type(self).__name__
         refuse_unknown(name, unknown)
+        self.task = with_effector(self.task, effector, name)
         self.options = Options.checked(
             name, render_mode, reward_type, terminate_on_success, randomize, observation_noise,
             obs_mode, width, height, camera, goal_marker, render_width=render_width,
@@ -78,7 +81,8 @@ class RigidGymEnv(gym.Env):
         self.render_mode = render_mode
         self.observation_space, self.action_space = task_spaces(self.task, self.options.pixels)
         size = self.action_space.shape[0]
-        self.scalar_series = (REWARD_SERIES, Series("action", ACTION_NAMES[:size],
+        names = GRIPPER_ACTION_NAMES if self.task.effector == "gripper" else ACTION_NAMES
+        self.scalar_series = (REWARD_SERIES, Series("action", names[:size],
                                                     ACTION_COLORS[:size]), SUCCESS_SERIES)
         """The plots a recording shows (``rigid_gym.recordable``): the reward, the action's
         entries, success; ``scalars`` gives their values."""
@@ -94,10 +98,18 @@ class RigidGymEnv(gym.Env):
     @classmethod
     def split_arguments(cls, kwargs: dict) -> tuple[Task, dict]:
         """The task that constructor arguments ``kwargs`` make, and the arguments left for
-        ``Options``: the class's ``task`` and all of them, unless the task takes arguments of
-        its own (TowerEnv's ``num_cubes``), which it takes out. The vector env builds its task
-        with this."""
-        return cls.task, kwargs
+        ``Options``: the class's task (``own_task``) driven by the ``effector`` argument, and
+        the rest. The vector env builds its task with this."""
+        rest = dict(kwargs)
+        task = cls.own_task(rest)
+        return with_effector(task, rest.pop("effector", "pad"), cls.__name__), rest
+
+    @classmethod
+    def own_task(cls, kwargs: dict) -> Task:
+        """The task of this class for constructor arguments ``kwargs``: the class's ``task``,
+        unless the task takes arguments of its own (TowerEnv's ``num_cubes``), which this
+        takes out of ``kwargs``."""
+        return cls.task
 
     # -- the Gymnasium API -------------------------------------------------------------------
 
@@ -216,7 +228,8 @@ class RigidGymEnv(gym.Env):
 
     @property
     def gripper(self):
-        """The SuctionGripper (``rigid_gym.envs.effector``)."""
+        """The effector: the SuctionGripper (``rigid_gym.envs.effector``), or with
+        ``effector="gripper"`` the ParallelGripper (``rigid_gym.envs.gripper``)."""
         return self.core.gripper
 
     @property

@@ -27,15 +27,15 @@ from rigid_gym.config import SolverConfig
 from rigid_gym.scene import Scene
 from rigid_gym.world import World
 
-from .effector import SuctionGripper, Workspace
-from .observation import PAD, gather_index
+from .effector import FloatingEffector
+from .gripper import EFFECTOR_CLASSES
+from .observation import gather_index
 from .options import Options
 from .pixels import CopyFrames
 from .task import (
     CUBE_HALF,
     CUBE_MASS,
     FRICTION,
-    GRIPPER_START,
     SOLVER_SETTINGS,
     SOLVER_STEPS,
     STEP_TIME,
@@ -70,9 +70,10 @@ class TaskBatch:
 
     State, every array with the leading copy axis: ``goals`` (B, goal_size) m, ``half``
     (B, cubes) m the cubes' half edges, ``places`` (B, fixtures, 3) m, ``rngs`` (B,) each
-    copy's generator (None until its first reset); the World, its ``gripper``
-    (SuctionGripper) and the body indices ``cubes``, ``fixtures``, ``table``,
-    ``gripper_body``.
+    copy's generator (None until its first reset); the World, its ``gripper`` (the task's
+    effector: a SuctionGripper, or a ParallelGripper with ``effector="gripper"``) and the
+    body indices ``cubes``, ``fixtures``, ``table``, ``gripper_body`` (the pad, or the
+    hand) and ``gripper_bodies`` (with the fingers).
     """
 
     def __init__(self, task: Task, options: Options, num_worlds: int | None, name: str):
@@ -89,17 +90,21 @@ class TaskBatch:
         self.desired64 = np.zeros((b, task.goal_size))
         self.world: World | None = None
         self.scene: Scene | None = None
-        self.gripper: SuctionGripper | None = None
+        self.gripper: FloatingEffector | None = None
         self.cubes: list[int] = []
         self.fixtures: list[int] = []
+        self.gripper_bodies: list[int] = []
         self.table = self.gripper_body = -1
         self.frames: CopyFrames | None = None  # the copies' pixels, when observed
         # how observe reads the World's state (made with the World from the task's layout:
-        # gather_index), and where the holding flag lies in an observation
+        # gather_index), and where the holding flag and the fingers' opening lie in an
+        # observation
         layout = task.observation_layout
         empty = np.zeros(0, dtype=np.int64)
         self.gather, self.minus = empty, empty
         self.holding = layout.slice("holding") if task.has_grip else None
+        self.width = layout.slice("fingers.width") if "fingers.width" in layout.slices \
+            else None
         self.all_worlds = np.arange(b, dtype=np.int64)
 
     # -- the World --------------------------------------------------------------------------
@@ -119,20 +124,20 @@ class TaskBatch:
                                      position=(0.0, 0.0, e[2]), friction=task.object_friction,
                                      restitution=restitution, name=f"cube{k}")
                       for k, e in enumerate(extents.tolist())]
-        self.gripper_body = scene.add_body(SuctionGripper.shape, kinematic=True,
-                                           position=GRIPPER_START, friction=FRICTION,
-                                           name="gripper")
+        effector = EFFECTOR_CLASSES[task.effector]
+        self.gripper_bodies = effector.add_to(scene)
+        self.gripper_body = self.gripper_bodies[0]
         self.fixtures = self.task.add_fixtures(scene)
         self.scene = scene
         # compiles the scene's geometry, which later resets reuse
         self.world = World(scene, dt=STEP_TIME / SOLVER_STEPS,
                            num_worlds=self.num_worlds if self.batched else None,
                            config=SolverConfig.for_scene(scene, **SOLVER_SETTINGS))
-        self.gripper = SuctionGripper(self.world, self.gripper_body, self.cubes,
-                                      extents, STEP_TIME, Workspace(),
-                                      [(i, scene.bodies[i].shape, scene.bodies[i].body_from_shape)
-                                       for i in self.fixtures])
-        bodies = {PAD: self.gripper_body} | {f"cube{k}": c for k, c in enumerate(self.cubes)}
+        self.gripper = effector(self.world, self.gripper_bodies, self.cubes, extents, STEP_TIME,
+                                [(i, scene.bodies[i].shape, scene.bodies[i].body_from_shape)
+                                 for i in self.fixtures])
+        bodies = {task.observation_layout.effector: self.gripper_body} | {
+            f"cube{k}": c for k, c in enumerate(self.cubes)}
         self.gather, self.minus = gather_index(self.task.observation_layout, len(scene.bodies),
                                                bodies)
         if self.options.pixels.pixels:
@@ -149,7 +154,7 @@ class TaskBatch:
         memo = {id(self.task): self.task, id(self.options): self.options}
         return copy.deepcopy((self, *carried), memo)
 
-    def built(self) -> tuple[World, SuctionGripper]:
+    def built(self) -> tuple[World, FloatingEffector]:
         """The World and its gripper, which the first reset builds."""
         if self.world is None or self.gripper is None:
             raise ResetNeeded(f"{self.name}: call reset() first (it builds the World)")
@@ -212,7 +217,8 @@ class TaskBatch:
                 for j, cube in enumerate(self.cubes):
                     w.set_material(cube, mass=mass[k, j], friction=friction[k, j],
                                    restitution=restitution[k, j], world=world)
-                w.set_material(self.gripper_body, friction=friction[k, n], world=world)
+                for body in self.gripper_bodies:  # the pad, or the hand and its fingers
+                    w.set_material(body, friction=friction[k, n], world=world)
                 w.set_material(self.table, friction=friction[k, n + 1], world=world)
         gripper.forget(copies)
 
@@ -244,8 +250,11 @@ class TaskBatch:
         vectors = np.empty((len(worlds), len(self.gather)))
         finite = gather_observations(s.position, s.velocity, s.rotation, s.angular_velocity,
                                      worlds, self.gather, self.minus, vectors)
-        if self.holding is not None:
-            vectors[:, self.holding] = (gripper.held[copies] >= 0)[:, None]
+        held = gripper.holding(worlds) if self.holding is not None else None
+        if held is not None:
+            vectors[:, self.holding] = (held >= 0)[:, None]
+        if self.width is not None:
+            vectors[:, self.width] = gripper.widths(worlds)[:, None]
         if not finite:  # a solver failure: say so here, not in a network
             self.refuse_non_finite(vectors, worlds)
         achieved = self.task.achieved_goal(vectors, s, worlds, self.cubes).astype(np.float32)
@@ -261,8 +270,8 @@ class TaskBatch:
         if self.options.reward_type == "sparse":
             rewards = sparse_reward(successes)  # from the test just made
         elif self.options.reward_type == "shaped":
-            held = gripper.held[copies] if self.task.has_grip \
-                else np.full(len(worlds), -1, dtype=np.int64)
+            if held is None:  # a task without a grip holds nothing
+                held = np.full(len(worlds), -1, dtype=np.int64)
             rewards = np.where(successes, 1.0, self.task.shaped(
                 clean, held, achieved64, desired64, self.half[copies]))
         else:

@@ -1,4 +1,6 @@
-"""The floating suction gripper every task is driven through, one per world of a World.
+"""The floating suction gripper every task is driven through by default, one per world of a
+World, and what it shares with the two-finger gripper (``envs/gripper.py``): a kinematic body
+moved by a displacement action, with the arm's force limit (``FloatingEffector``).
 
 The gripper is a kinematic body (a flat box, infinite mass): each env step the action sets its
 velocity, and the solver moves it and lets it push whatever it meets. Two things are not
@@ -28,6 +30,8 @@ from rigid_gym._core import Pads
 
 from rigid_gym.shapes import Box, Compound, Pose
 
+from .task import FRICTION, GRIPPER_START
+
 STEP_DISTANCE = 0.05
 """m the gripper moves per env step along an axis at action 1 (panda-gym's and Fetch's scale)."""
 PAD_HALF_EXTENTS = (0.02, 0.02, 0.015)
@@ -47,47 +51,62 @@ class Workspace:
     high: tuple[float, float, float] = (0.25, 0.25, 0.3)
 
 
-class SuctionGripper:
-    """Drives body ``body`` (a kinematic Box of ``PAD_HALF_EXTENTS``) in every world of
-    ``world`` (a World, batched or not: its ``state`` arrays have a leading world axis B).
+class FloatingEffector:
+    """What the floating effectors share: a kinematic box (the pad, or a parallel gripper's
+    hand) driven in every world of ``world`` (a World, batched or not: its ``state`` arrays
+    have a leading world axis B) by a displacement each env step, with the arm's force limit
+    (the module docstring), and the bodies that move with it (a gripper's fingers).
 
-    objects: indices of the dynamic bodies it may push and grip, each a Box; ``half_extents``
-        (k, 3) m their sizes (the same in every world). ``step_time``: s per env step.
-    fixtures: (body index, shape, body_from_shape Pose) of each static body a downward move
-        stops on (``fixture_boxes``: a Box or a Compound of Boxes).
-    ``held`` (B,) int64: the object each world's gripper holds (an index into ``objects``),
-    -1 for none.
+    bodies: the body indices ``add_to`` returned, the driven body first (``body``), then those
+        that move with it (``carried``). objects: indices of the dynamic bodies it may push and
+        take, each a Box; ``half_extents`` (k, 3) m their sizes (the same in every world).
+        ``step_time``: s per env step. fixtures: (body index, shape, body_from_shape Pose) of
+        each static body a downward move stops on (``fixture_boxes``: a Box or a Compound of
+        Boxes).
+
+    A subclass sets the class attributes ``body_half`` (m, the driven box's half extents),
+    ``carried_half`` (m, each carried body's), ``workspace`` and ``start``, and implements
+    ``add_to``, ``command``, ``holding`` and ``forget``.
     """
 
-    shape = Box(PAD_HALF_EXTENTS)
+    body_half: tuple = PAD_HALF_EXTENTS
+    carried_half: tuple = (0.0, 0.0, 0.0)
+    workspace = Workspace()
+    start: tuple = GRIPPER_START
+    """m: the driven body's centre at reset."""
+    top_grip: float = PAD_HALF_EXTENTS[2]
+    """m from the top of an object taken by its top (Insert's peg) to the driven body's
+    centre: the pad rests on it."""
 
-    def __init__(self, world, body: int, objects, half_extents, step_time: float,
-                 workspace: Workspace = Workspace(), fixtures=()):
+    def __init__(self, world, bodies, objects, half_extents, step_time: float, fixtures=()):
         self.world = world
-        self.body = body
+        self.body = int(bodies[0])
+        self.carried = np.asarray(bodies[1:], dtype=np.int64)
         self.objects = np.asarray(objects, dtype=np.int64)
         self.half_extents = np.asarray(half_extents, dtype=np.float64).reshape(-1, 3)
         self.step_time = step_time
-        self.workspace = workspace
-        self.held = np.full(world.num_worlds, -1, dtype=np.int64)
+        self.num_worlds = world.num_worlds
         self.num_bodies = len(world.scene)
         self.fixed = fixture_boxes(fixtures)
         self.pads = self.made_pads()
-        # a contact within GRIP_MARGIN needs the centres within the two bounding spheres
-        reach = (np.linalg.norm(PAD_HALF_EXTENTS) + np.linalg.norm(self.half_extents, axis=1)
-                 + GRIP_MARGIN + REACH_SLACK)
-        self.reach_squared = reach * reach
+
+    @property
+    def bodies(self) -> list[int]:
+        """Every body of the effector: the driven one, then the carried ones."""
+        return [self.body, *self.carried.tolist()]
 
     def made_pads(self) -> Pads:
-        """The core's gripper object for these pads: what every command passes to the core,
-        fixed once (the pad, the boxes, the fixtures' box parts, the workspace), and the
-        command's work rows."""
+        """The core's command object for these effectors: what every command passes to the
+        core, fixed once (the driven box, the bodies carried with it, the boxes, the fixtures'
+        box parts, the workspace), and the command's work rows."""
         fixed_bodies, fixed_offsets, fixed_rotations, fixed_halves = self.fixed
-        return Pads(num_worlds=len(self.held), num_bodies=self.num_bodies, pad=self.body,
-                    pad_half=PAD_HALF_EXTENTS, objects=self.objects, halves=self.half_extents,
+        return Pads(num_worlds=self.num_worlds, num_bodies=self.num_bodies, pad=self.body,
+                    pad_half=self.body_half, objects=self.objects, halves=self.half_extents,
                     low=self.workspace.low, high=self.workspace.high,
                     fixed_bodies=fixed_bodies, fixed_offsets=fixed_offsets,
                     fixed_rotations=fixed_rotations, fixed_halves=fixed_halves,
+                    carried=self.carried,
+                    carried_halves=np.tile(self.carried_half, (len(self.carried), 1)),
                     step_distance=STEP_DISTANCE, step_time=self.step_time)
 
     def __getstate__(self) -> dict:
@@ -103,25 +122,84 @@ class SuctionGripper:
 
     @property
     def position(self) -> np.ndarray:
-        """The pad's centre, m: (3,) for an unbatched World, (B, 3) for a batched one."""
+        """The driven body's centre, m: (3,) for an unbatched World, (B, 3) for a batched
+        one."""
         return self.world.position[..., self.body, :]
 
     @property
     def velocity(self) -> np.ndarray:
-        """The pad's velocity, m/s, shaped as ``position``."""
+        """The driven body's velocity, m/s, shaped as ``position``."""
         return self.world.velocity[..., self.body, :]
+
+    def move(self, motions: np.ndarray, held: np.ndarray) -> None:
+        """Set the driven body's velocity in every world for this env step: ``motions``
+        (B, 3) in [-1, 1] scale ``STEP_DISTANCE``, with the force limit for the held objects
+        ``held`` (B,) int64 (indices into ``objects``, -1: none). The velocity is written into
+        the state as World.set_velocity would (the body never turns: omega stays 0), without
+        its checks: the target is finite by construction."""
+        s = self.world.state
+        self.pads.command(np.ascontiguousarray(motions), s.position, s.rotation, s.velocity, held)
+
+    @classmethod
+    def add_to(cls, scene) -> list[int]:
+        """Add the effector's bodies (and joints) to ``scene`` at ``start``; returns their
+        indices, the driven body first."""
+        raise NotImplementedError
+
+    def command(self, motions: np.ndarray, grips: np.ndarray | None) -> None:
+        """Start an env step in every world: ``motions`` (B, 3) in [-1, 1], and ``grips``
+        (B,) in [-1, 1] (None: tasks without a grip)."""
+        raise NotImplementedError
+
+    def holding(self, worlds) -> np.ndarray:
+        """(k,) int64: the object each of ``worlds`` (an index array, or slice(None)) holds
+        now (an index into ``objects``), -1 for none."""
+        raise NotImplementedError
+
+    def widths(self, worlds) -> np.ndarray:
+        """(k,) m: the opening between the fingers in each of ``worlds`` (an index array, or
+        slice(None)), for an effector with fingers (observed as ``fingers.width``)."""
+        raise NotImplementedError
+
+    def forget(self, worlds) -> None:
+        """``worlds`` (an index array, or slice(None)) were reset (their World's bodies are
+        at the scene's start): nothing is held there any more."""
+        raise NotImplementedError
+
+
+class SuctionGripper(FloatingEffector):
+    """The suction pad: drives body ``body`` (a kinematic Box of ``PAD_HALF_EXTENTS``) and
+    grips by suction (the module docstring); ``FloatingEffector`` gives the arguments.
+
+    ``held`` (B,) int64: the object each world's gripper holds (an index into ``objects``),
+    -1 for none.
+    """
+
+    shape = Box(PAD_HALF_EXTENTS)
+
+    def __init__(self, world, bodies, objects, half_extents, step_time: float, fixtures=()):
+        super().__init__(world, bodies, objects, half_extents, step_time, fixtures)
+        self.held = np.full(world.num_worlds, -1, dtype=np.int64)
+        # a contact within GRIP_MARGIN needs the centres within the two bounding spheres
+        reach = (np.linalg.norm(PAD_HALF_EXTENTS) + np.linalg.norm(self.half_extents, axis=1)
+                 + GRIP_MARGIN + REACH_SLACK)
+        self.reach_squared = reach * reach
+
+    @classmethod
+    def add_to(cls, scene) -> list[int]:
+        return [scene.add_body(cls.shape, kinematic=True, position=cls.start, friction=FRICTION,
+                               name="gripper")]
 
     def command(self, motions: np.ndarray, grips: np.ndarray | None) -> None:
         """Start an env step in every world: ``motions`` (B, 3) in [-1, 1] scale
         ``STEP_DISTANCE``; ``grips`` (B,): > 0 closes the suction, <= 0 opens it; None
         (tasks without a grip) leaves it open."""
-        s = self.world.state
-        # the velocity written into the state as World.set_velocity would (it never turns:
-        # omega stays 0), without its checks: the target is finite by construction
-        self.pads.command(np.ascontiguousarray(motions), s.position, s.rotation, s.velocity,
-                          self.held)
+        self.move(motions, self.held)
         if grips is not None:
             self.grip(grips)
+
+    def holding(self, worlds) -> np.ndarray:
+        return self.held[worlds]
 
     def grip(self, grips: np.ndarray) -> None:
         """After the pad's velocity is set: in the worlds where ``grips`` (B,) > 0 and

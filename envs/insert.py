@@ -73,6 +73,7 @@ class Insert(Task):
 
     num_cubes = 1
     has_grip = True
+    grasps = True
     goal_size = 3
     num_fixtures = 1
 

@@ -2,7 +2,7 @@
 body with its size and unit, and the World state it reads.
 
 A task owns its layout (``Task.observation_layout``, made by ``observation_layout`` from the
-task's cubes and grip). Everything that reads or writes the vector goes through it: the env's
+task's cubes, grip and effector). Everything that reads or writes the vector goes through it: the env's
 index into the World's state (``gather_index``, for ``gather_observations``), the observation
 space's size, the achieved goal's entries, the scripted policies and each env's documentation
 table (``Layout.table``).
@@ -22,17 +22,28 @@ import numpy as np
 QUANTITIES = {
     "position": (3, "m", "centre position"),
     "velocity": (3, "m/s", "velocity"),
-    "offset": (3, "m", "position minus the pad's"),
+    "offset": (3, "m", "position minus the pad's (the hand's, with effector=\"gripper\")"),
     "orientation": (6, "", ("rotation matrix, first two columns (continuous, unlike a "
                             "quaternion's sign or Euler angles)")),
     "angular_velocity": (3, "rad/s", "angular velocity"),
-    "holding": (1, "", "1 while the pad holds a cube, else 0"),
+    "holding": (1, "", ("1 while the effector holds a cube (the pad's suction, or a cube "
+                        "between the fingers with both pads on it), else 0")),
+    "width": (1, "m", "opening between the pads"),
 }
 """quantity -> (size, unit, what it is); positions and velocities in the world frame, of the
 body's centre (a cube's centre is its centre of mass)."""
+DERIVED = ("holding", "width")
+"""The quantities that are no entry of the World's state: the env writes them
+(``envs/core.py``)."""
 
 PAD = "pad"
-"""The body name of the gripper's pad in a layout."""
+"""The body name of the suction gripper's pad in a layout."""
+HAND = "hand"
+"""The body name of the parallel gripper's hand in a layout (``effector="gripper"``)."""
+FINGERS = "fingers"
+"""The body name of the parallel gripper's fingers in a layout."""
+EFFECTOR_BODIES = {"pad": PAD, "gripper": HAND}
+"""Effector name -> the body name of its driven body in a layout."""
 
 
 class Field(NamedTuple):
@@ -49,8 +60,9 @@ class Field(NamedTuple):
     def content(self) -> str:
         """What the field holds, in words (the documentation's)."""
         what = QUANTITIES[self.quantity][2]
-        subject = {"": "", PAD: "the pad's "}.get(self.body,
-                                                  f"cube {self.body.removeprefix('cube')}'s ")
+        subject = {"": "", PAD: "the pad's ", HAND: "the hand's ",
+                   FINGERS: "the fingers' "}.get(self.body,
+                                                 f"cube {self.body.removeprefix('cube')}'s ")
         return subject + what + (f", {self.unit}" if self.unit else "")
 
 
@@ -66,7 +78,8 @@ class Layout:
     of those before it.
 
     size: the vector's length. slice(name): a field's entries. split(vector): every field of
-    ``vector`` (..., size) by name, views (..., field size).
+    ``vector`` (..., size) by name, views (..., field size). effector: the body name of the
+    first field, the driven body (``PAD`` or ``HAND``), whose position offsets subtract.
     """
 
     def __init__(self, fields: tuple[Field, ...]):
@@ -77,6 +90,7 @@ class Layout:
         ends = np.cumsum([f.size for f in self.fields]).tolist()
         self.slices = {f.name: slice(end - f.size, end) for f, end in zip(self.fields, ends)}
         self.size = ends[-1] if ends else 0
+        self.effector = self.fields[0].body if self.fields else PAD
 
     def slice(self, name: str) -> slice:
         """The entries of field ``name``."""
@@ -104,12 +118,16 @@ class Layout:
         return "\n".join(["| entries | field | content |", "|---|---|---|", *rows])
 
 
-def observation_layout(num_cubes: int, has_grip: bool) -> Layout:
-    """The layout of a task with ``num_cubes`` cubes, with or without a grip: the pad's
-    position and velocity, whether it holds a cube (tasks with a grip), then per cube its
-    position, its position minus the pad's, orientation, velocity and angular velocity."""
-    pad = [field(PAD, "position"), field(PAD, "velocity")] + (
-        [field("", "holding")] if has_grip else [])
+def observation_layout(num_cubes: int, has_grip: bool, effector: str = "pad") -> Layout:
+    """The layout of a task with ``num_cubes`` cubes, with or without a grip, driven by
+    ``effector`` ("pad" or "gripper"): the pad's (or the hand's) position and velocity,
+    whether it holds a cube (tasks with a grip), the fingers' opening (the gripper's, as
+    panda-gym observes it), then per cube its position, its position minus the pad's (the
+    hand's), orientation, velocity and angular velocity."""
+    body = EFFECTOR_BODIES[effector]
+    pad = [field(body, "position"), field(body, "velocity")] + (
+        [field("", "holding")] if has_grip else []) + (
+        [field(FINGERS, "width")] if effector == "gripper" else [])
     cubes = [field(f"cube{k}", quantity) for k in range(num_cubes)
              for quantity in ("position", "offset", "orientation", "velocity",
                               "angular_velocity")]
@@ -121,9 +139,10 @@ def gather_index(layout: Layout, num_bodies: int,
     """Where ``gather_observations`` (src/envs/observation.h) finds each entry of ``layout`` in a
     world's state laid side by side: positions (num_bodies x 3), velocities (x 3), rotations
     (x 9, row-major), angular velocities (x 3). ``bodies`` maps a layout's body names to body
-    indices. Returns the (size,) int64 index and the (size,) entries subtracted (-1: none;
-    an offset subtracts the pad's position). The holding flag is no state entry: its place
-    reads entry 0 and the env writes the flag over it."""
+    indices (the layout's ``effector`` among them). Returns the (size,) int64 index and the
+    (size,) entries subtracted (-1: none; an offset subtracts the effector's position). The
+    DERIVED quantities (the holding flag, the fingers' opening) are no state entries: their
+    places read entry 0 and the env writes them over it."""
     n = num_bodies
 
     def entries(body: int, quantity: str) -> list[int]:
@@ -141,10 +160,11 @@ def gather_index(layout: Layout, num_bodies: int,
     index: list[int] = []
     minus: list[int] = []
     for f in layout.fields:
-        if f.quantity == "holding":
-            index += [0]
-            minus += [-1]
+        if f.quantity in DERIVED:
+            index += [0] * f.size
+            minus += [-1] * f.size
             continue
         index += entries(bodies[f.body], f.quantity)
-        minus += entries(bodies[PAD], "position") if f.quantity == "offset" else [-1] * f.size
+        minus += entries(bodies[layout.effector], "position") if f.quantity == "offset" \
+            else [-1] * f.size
     return np.array(index, dtype=np.int64), np.array(minus, dtype=np.int64)

@@ -40,6 +40,7 @@ ARGUMENTS_TABLE = """| argument | default | meaning |
     | width, height | 84 | frame size of ``pixels``, in [16, 1024] pixels; given, also of ``render()`` |
     | camera | "front" | the frame's camera: "front", "top", "side" (``rigid_gym.envs.pixels.CAMERAS``) or a ``rigid_gym.render.Camera`` |
     | goal_marker | True | draw the goal marker in ``pixels`` |
+    | effector | "pad" | "pad" (the suction pad, ``rigid_gym.envs.effector``) or "gripper" (Stack, Throw, PickAndPlace, Tower, Insert: a two-finger gripper that holds by friction, ``rigid_gym.envs.gripper``; its fourth action entry opens (> 0) or closes (< 0) the fingers, and ``observation`` gains their opening) |
     | render_width, render_height | width, height if given, else 480 | frame size of ``render()``, in [16, 4096] pixels (panda-gym's names) |
     | render_target_position, render_distance, render_yaw, render_pitch | the task's view | ``render()``'s camera as panda-gym (PyBullet) places it: looking at the target (3,) m from ``distance`` m, turned ``yaw`` degrees about z (0: from -y) and ``pitch`` degrees about the horizontal (-30: from above), in (-90, 90); each not given keeps the task's view's |"""
 """The constructor arguments every task shares, as its docstring's "Arguments" table."""

@@ -36,6 +36,7 @@ class PickAndPlace(Task):
 
     num_cubes = 1
     has_grip = True
+    grasps = True
     goal_size = 3
 
     def place_cubes(self, rngs, half):

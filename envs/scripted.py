@@ -6,6 +6,10 @@ any state; it reads the observation's fields by name (the task's ``observation_l
 
     policy = scripted_policy(env)          # env: any rigid_gym env, wrapped or not
     action = policy(observation)
+
+An env made with ``effector="gripper"`` gets the two-finger gripper's policies (the ``*_fingers``
+functions): approach open, descend around the object, close until both pads press it, lift,
+carry, put down and open (Throw: open in flight, one step after the launch).
 """
 
 from __future__ import annotations
@@ -26,6 +30,7 @@ from .flip import (
     rotation_matrices,
     tilt,
 )
+from .gripper import FINGER_DROP, TOP_GRASP
 from .insert import CLEARANCE, HOLE_DEPTH, HOLE_HALF, PEG_HALF_EXTENTS, Insert
 from .observation import Layout
 from .slide import PUCK_FRICTION, PUCK_RADIUS
@@ -49,6 +54,21 @@ FLIP_ROLL_SHIFT = 0.06
 """m a roll moves the cube, about (for choosing rolls that keep it in the middle)."""
 INSERT = Insert()
 """Insert's goal test, which the policy reads from the observation's goals."""
+OPEN, CLOSE = 1.0, -1.0
+"""The gripper's finger commands: full speed open, full speed closed (pressing with the full
+grip force once the pads meet the object)."""
+FINGER_CLEARANCE = 0.01
+"""m: the gripper's finger tips stop this far above the bottom of the object they take."""
+GRIPPER_CRUISE = 0.15
+"""m: hand centre height for moving over cubes empty (the finger tips 8 cm up)."""
+GRIPPER_CARRY = GRIPPER_CRUISE + 0.02
+"""m: hand centre height for carrying a cube over the others (its bottom 9.5 cm up)."""
+FIRM = 0.001
+"""m: the gripper holds firmly once its opening is within this of the object's width."""
+THROW_LAUNCH = (0.15, 0.2)
+"""m: x and hand centre height of the gripper's launch point: from there the launch step and
+the release step each move the hand up to 5 cm in x and z and stay in its workspace (x up to
+0.25 m), and the hand's palm stays above the rising cube."""
 
 
 def scripted_policy(env):
@@ -56,10 +76,15 @@ def scripted_policy(env):
     task = env.unwrapped
     if not isinstance(task, RigidGymEnv):
         raise ValueError(f"scripted_policy: expected a rigid_gym env, got {type(task).__name__}")
-    policy = {"PushEnv": _push, "StackEnv": _stack, "ThrowEnv": _throw,
-              "ReachEnv": _reach, "PickAndPlaceEnv": _pick_and_place, "SlideEnv": _slide,
-              "FlipEnv": _flip,
-              "TowerEnv": _tower, "InsertEnv": _insert}[type(task).__name__]
+    if task.task.effector == "gripper":
+        policy = {"StackEnv": _tower_fingers, "TowerEnv": _tower_fingers,
+                  "PickAndPlaceEnv": _pick_and_place_fingers, "ThrowEnv": _throw_fingers,
+                  "InsertEnv": _insert_fingers}[type(task).__name__]
+    else:
+        policy = {"PushEnv": _push, "StackEnv": _stack, "ThrowEnv": _throw,
+                  "ReachEnv": _reach, "PickAndPlaceEnv": _pick_and_place, "SlideEnv": _slide,
+                  "FlipEnv": _flip,
+                  "TowerEnv": _tower, "InsertEnv": _insert}[type(task).__name__]
     return functools.partial(policy, task.task.observation_layout)
 
 
@@ -218,11 +243,14 @@ def _throw(layout: Layout, observation: dict) -> np.ndarray:
     return np.append(np.clip(velocity * STEP_TIME / STEP_DISTANCE, -1.0, 1.0), -1.0)
 
 
-def _launch_velocity(start: np.ndarray, goal: np.ndarray, vertical: float = 1.25) -> np.ndarray:
+def _launch_velocity(start: np.ndarray, goal: np.ndarray, vertical: float = 1.25,
+                     carried: float = 0.0) -> np.ndarray:
     """Velocity (3,) m/s with vertical component ``vertical`` that carries a point from
-    ``start`` to ``goal`` under gravity (descending branch of the parabola)."""
-    drop = start[2] - goal[2]
-    time = (vertical + np.sqrt(vertical ** 2 + 2 * G * drop)) / G
+    ``start`` to ``goal``: first in a straight line at that velocity for ``carried`` s (the
+    gripper's launch step, still closed), then under gravity (descending branch of the
+    parabola)."""
+    drop = start[2] + vertical * carried - goal[2]
+    time = (vertical + np.sqrt(vertical ** 2 + 2 * G * drop)) / G + carried
     return np.array([(goal[0] - start[0]) / time, (goal[1] - start[1]) / time, vertical])
 
 
@@ -330,3 +358,137 @@ def _flip(layout: Layout, observation: dict) -> np.ndarray:
     if pad[2] > push_height + 0.003:
         return np.append(_toward(pad, behind), -1.0)  # descend behind the cube
     return np.append(direction * FLIP_PUSH_SPEED, -1.0)
+
+
+# -- the two-finger gripper (effector="gripper") ---------------------------------------------
+
+def _firmly_held(layout: Layout, observation: dict, half_width: float) -> bool:
+    """Whether the gripper holds an object of half width ``half_width`` (m, along the fingers'
+    axis) with both pads pressing it: the holding flag, and the opening closed to within FIRM
+    of the object's width (the flag comes a little earlier, as the pads arrive)."""
+    width = observation["observation"][layout.slice("fingers.width")][0]
+    return _held(layout, observation) and bool(width <= 2.0 * half_width + FIRM)
+
+
+def _grasp_height(obj: np.ndarray, half_height: float) -> float:
+    """The hand's centre height at which the fingers take an object centred at ``obj`` of half
+    height ``half_height`` (m): the tips FINGER_CLEARANCE above its bottom, or, for an object
+    taller than the fingers take (Insert's peg), around its top TOP_GRASP."""
+    tips = max(obj[2] - half_height + FINGER_CLEARANCE, obj[2] + half_height - TOP_GRASP)
+    return tips + FINGER_DROP
+
+
+def _take(hand: np.ndarray, obj: np.ndarray, half_height: float, cruise: float) -> np.ndarray:
+    """Approach ``obj`` open at ``cruise`` (the hand's centre, m), descend around it, then
+    close on it (and stay still while the fingers close): the action."""
+    grasp = np.array([obj[0], obj[1], _grasp_height(obj, half_height)])
+    if np.linalg.norm(hand[:2] - grasp[:2]) > ALIGNED:
+        return np.append(_above(hand, grasp, cruise), OPEN)
+    if hand[2] > grasp[2] + 0.003:
+        return np.append(_toward(hand, grasp), OPEN)
+    return np.append(np.zeros(3), CLOSE)
+
+
+def _put(hand: np.ndarray, obj: np.ndarray, target: np.ndarray, carry: float) -> np.ndarray:
+    """Carry the held ``obj`` at ``carry`` (the hand's centre, m) over ``target``, lower it
+    until its centre is there (a table or a cube below stops it: the force limit), and open:
+    the action."""
+    goal_hand = target + hand - obj
+    if np.linalg.norm(obj[:2] - target[:2]) > ALIGNED:
+        return np.append(_above(hand, goal_hand, carry), CLOSE)
+    if obj[2] > target[2] + 0.002:
+        return np.append(_toward(hand, goal_hand), CLOSE)
+    return np.append(np.zeros(3), OPEN)
+
+
+def _between(hand: np.ndarray, cube: np.ndarray) -> bool:
+    """Whether ``cube`` lies between the fingers where ``_take`` grasps it (the cube held)."""
+    return bool(np.linalg.norm(hand[:2] - cube[:2]) < 0.01
+                and abs(hand[2] - _grasp_height(cube, CUBE_HALF)) < 0.01)
+
+
+def _tower_fingers(layout: Layout, observation: dict) -> np.ndarray:
+    """Stack and Tower with the gripper: take each cube in turn, cube 0 first, carry it over
+    the tower built so far and put it on top; then open and rise."""
+    hand = _field(layout, observation, "hand.position")
+    goal = observation["desired_goal"].astype(np.float64).reshape(-1, 3)
+    cubes = [_field(layout, observation, f"cube{k}.position") for k in range(len(goal))]
+    for cube, target in zip(cubes, goal):
+        if np.linalg.norm(cube - target) > 0.01:
+            if _held(layout, observation) and not _between(hand, cube):
+                return np.append(np.zeros(3), OPEN)  # holding another cube: let it go
+            top = target[2] - CUBE_HALF  # of the tower built so far
+            if not _firmly_held(layout, observation, CUBE_HALF):
+                return _take(hand, cube, CUBE_HALF,
+                             max(GRIPPER_CRUISE, top + FINGER_DROP + 0.02))
+            return _put(hand, cube, target,
+                        max(GRIPPER_CARRY, top + CUBE_HALF + 0.02 + hand[2] - cube[2]))
+    return np.array([0.0, 0.0, 1.0, OPEN])
+
+
+def _pick_and_place_fingers(layout: Layout, observation: dict) -> np.ndarray:
+    """PickAndPlace with the gripper: take the cube; put it down at a target on the table, or
+    hold it at one in the air."""
+    hand = _field(layout, observation, "hand.position")
+    cube = _field(layout, observation, "cube0.position")
+    target = observation["desired_goal"].astype(np.float64)
+    if not _firmly_held(layout, observation, CUBE_HALF):
+        if np.linalg.norm(cube - target) < 0.01 and not _held(layout, observation):
+            return np.array([0.0, 0.0, 1.0, OPEN])  # put down: stay clear
+        return _take(hand, cube, CUBE_HALF, GRIPPER_CRUISE)
+    if target[2] < CUBE_HALF + 0.005:  # on the table
+        return _put(hand, cube, target, GRIPPER_CARRY)
+    if cube[2] < CUBE_HALF + 0.02 and np.linalg.norm(cube[:2] - target[:2]) > ALIGNED:
+        return np.array([0.0, 0.0, 1.0, CLOSE])  # lift clear of the table first
+    return np.append(_toward(hand, target + hand - cube), CLOSE)  # then hold it at the target
+
+
+def _throw_fingers(layout: Layout, observation: dict) -> np.ndarray:
+    """Throw with the gripper: take the cube, carry it to the launch point, swing it at the
+    launch velocity for one step still closed, then open while the hand keeps that velocity
+    (so the cube leaves with it), and follow through up and back out of its way."""
+    hand = _field(layout, observation, "hand.position")
+    cube = _field(layout, observation, "cube0.position")
+    goal = observation["desired_goal"].astype(np.float64)
+    if not _held(layout, observation):
+        if cube[2] > 0.03 or np.linalg.norm(cube[:2]) > 0.3:  # in flight or thrown
+            return np.array([-1.0, 0.0, 1.0, OPEN])
+        return _take(hand, cube, CUBE_HALF, GRIPPER_CRUISE)
+    if not _firmly_held(layout, observation, CUBE_HALF):
+        return _take(hand, cube, CUBE_HALF, GRIPPER_CRUISE)  # still closing
+    launch = np.array([THROW_LAUNCH[0], np.clip(goal[1] * 0.5, -0.2, 0.2), THROW_LAUNCH[1]])
+    if hand[0] > launch[0] + 0.005 and hand[2] > launch[2] + 0.005:  # launched: let go
+        velocity = _field(layout, observation, "hand.velocity")
+        return np.append(velocity * STEP_TIME / STEP_DISTANCE, OPEN)
+    if np.linalg.norm(hand - launch) > 0.01:
+        return np.append(_toward(hand, launch), CLOSE)
+    velocity = _launch_velocity(cube, goal, carried=STEP_TIME)
+    return np.append(np.clip(velocity * STEP_TIME / STEP_DISTANCE, -1.0, 1.0), CLOSE)
+
+
+def _insert_fingers(layout: Layout, observation: dict) -> np.ndarray:
+    """Insert with the gripper: take the peg around its top and lift it clear of the block;
+    over the block, line it up with the hole and lower it to the floor; open and rise. Every
+    branch reads where the peg is now, as the pad's policy does."""
+    hand = _field(layout, observation, "hand.position")
+    peg = _field(layout, observation, "cube0.position")
+    goal = observation["desired_goal"].astype(np.float64)
+    half_length = PEG_HALF_EXTENTS[2]
+    cruise = 2.0 * half_length + FINGER_DROP + 0.02  # the tips clear a standing peg
+    if not _firmly_held(layout, observation, PEG_HALF_EXTENTS[1]):
+        if INSERT.goal_reached(peg, goal) and not _held(layout, observation):
+            return np.array([0.0, 0.0, 1.0, OPEN])  # in: rise clear
+        return _take(hand, peg, half_length, cruise)
+    goal_hand = goal + (hand - peg)
+    error = np.abs(peg[:2] - goal[:2]).max()  # of its axis from the hole's, along x or y
+    below_top = peg[2] - half_length < HOLE_DEPTH - 0.001  # its bottom below the block's top
+    if below_top and error < HOLE_HALF:  # in the hole: down to the floor, then let go
+        if peg[2] > goal[2] + 0.002:
+            return np.append(_toward(hand, goal_hand), CLOSE)
+        return np.append(np.zeros(3), OPEN)
+    if below_top:  # beside the block: up and over, clear of it
+        return np.append(_above(hand, goal_hand, HOLE_DEPTH + half_length + 0.03
+                                + hand[2] - peg[2]), CLOSE)
+    if error > CLEARANCE:  # over the block: line up at this height
+        return np.append(_toward(hand, np.array([goal_hand[0], goal_hand[1], hand[2]])), CLOSE)
+    return np.append(_toward(hand, goal_hand), CLOSE)

@@ -12,6 +12,7 @@ Conventions (those of panda-gym and Gymnasium-Robotics Fetch, so their HER setti
 
 from __future__ import annotations
 
+import copy
 import functools
 
 import numpy as np
@@ -55,6 +56,12 @@ GOAL_COLOR = (0.2, 0.8, 0.3)
 """Colour of a goal marker that belongs to no cube in particular."""
 
 
+EFFECTORS = ("pad", "gripper")
+"""What drives a task (the ``effector`` argument): "pad", the suction pad
+(``rigid_gym.envs.effector``, every task's default), or "gripper", the two-finger parallel
+gripper that holds by friction (``rigid_gym.envs.gripper``, the tasks that grasp)."""
+
+
 class Task:
     """Base of every task. A subclass sets ``num_cubes``, ``has_grip``, ``goal_size`` (and
     ``camera_view`` if the default does not suit; ``half_extents`` where its objects are not
@@ -65,6 +72,12 @@ class Task:
     num_cubes: int = 1
     has_grip: bool = False
     goal_size: int = 3
+    grasps: bool = False
+    """Whether the task is done by picking objects up, so that the two-finger gripper can drive
+    it (``effector="gripper"``)."""
+    effector: str = "pad"
+    """What drives this task's gripper: one of EFFECTORS (``with_effector`` makes the task
+    driven by another)."""
     camera_view = ((0.36, -0.48, 0.4), (0.0, 0.0, 0.03), 30.0)
     """(eye (m), target (m), vertical field of view (deg)) of the rgb_array camera: the
     workspace from the front right, above."""
@@ -91,7 +104,7 @@ class Task:
     def observation_layout(self) -> Layout:
         """The fields of this task's ``observation`` vector, in order
         (``rigid_gym.envs.observation``)."""
-        return observation_layout(self.num_cubes, self.has_grip)
+        return observation_layout(self.num_cubes, self.has_grip, self.effector)
 
     @functools.cached_property
     def achieved_columns(self) -> np.ndarray:
@@ -168,11 +181,39 @@ class Task:
     def shaped(self, vectors: np.ndarray, held: np.ndarray, achieved_goal: np.ndarray,
                desired_goal: np.ndarray, half: np.ndarray) -> np.ndarray:
         """The shaped reward of copies whose noise-free observation vectors are ``vectors``
-        (k, layout size): ``shaped_reward`` of the pad's position read from them. A task whose
-        stages read more of the state than the pad and the goals (Flip: the cube's position,
-        which its goal does not hold) overrides this."""
-        pad = vectors[:, self.observation_layout.slice("pad.position")]
+        (k, layout size): ``shaped_reward`` of the pad's (or the hand's) position read from
+        them. A task whose stages read more of the state than the pad and the goals (Flip: the
+        cube's position, which its goal does not hold) overrides this."""
+        layout = self.observation_layout
+        pad = vectors[:, layout.slice(f"{layout.effector}.position")]
         return self.shaped_reward(pad, held, achieved_goal, desired_goal, half)
+
+
+def with_effector(task: Task, effector, where: str) -> Task:
+    """``task`` driven by ``effector`` (one of EFFECTORS): ``task`` itself for its own
+    effector, else a copy that differs in ``effector`` only (one per task and effector,
+    shared: a Task holds no state). A ValueError that starts with ``where`` (the env's class
+    name) for another value, or for the gripper on a task that does not grasp."""
+    if not isinstance(effector, str) or effector not in EFFECTORS:
+        raise ValueError(f"{where}: effector must be one of {list(EFFECTORS)}, got {effector!r}")
+    if effector == task.effector:
+        return task
+    if effector == "gripper" and not task.grasps:
+        raise ValueError(f"{where}: effector='gripper' is for the tasks that pick objects up "
+                         "(Stack, Throw, PickAndPlace, Tower, Insert); this task is done by "
+                         "pushing, so it takes the pad only (effector='pad')")
+    return driven_by(task, effector)
+
+
+@functools.cache
+def driven_by(task: Task, effector: str) -> Task:
+    """The copy of ``task`` driven by ``effector`` (``with_effector``), made once."""
+    variant = copy.copy(task)
+    for name in list(variant.__dict__):  # what is cached is made again for the effector
+        if isinstance(getattr(type(task), name, None), functools.cached_property):
+            del variant.__dict__[name]
+    variant.effector = effector
+    return variant
 
 
 SHAPED_SCALE = 5.0

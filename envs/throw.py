@@ -55,6 +55,7 @@ class Throw(Task):
 
     num_cubes = 1
     has_grip = True
+    grasps = True
     goal_size = 3
     num_fixtures = 1
     camera_view = ((0.2, -0.8, 0.8), (0.26, 0.0, 0.02), 42.0)

@@ -45,6 +45,7 @@ class Tower(Task):
     target and each rests on the one below as the targets do."""
 
     has_grip = True
+    grasps = True
 
     def __init__(self, num_cubes: int = NUM_CUBES):
         self.num_cubes = num_cubes
@@ -181,6 +182,5 @@ class TowerEnv(RigidGymEnv):
         super().__init__(**kwargs)
 
     @classmethod
-    def split_arguments(cls, kwargs):
-        rest = dict(kwargs)
-        return tower(rest.pop("num_cubes", NUM_CUBES)), rest
+    def own_task(cls, kwargs):
+        return tower(kwargs.pop("num_cubes", NUM_CUBES))

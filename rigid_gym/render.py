@@ -49,6 +49,9 @@ GROUND_COLOR = (0.90, 0.86, 0.79)
 """Plane bodies (light wood); their patch alternates it with a 6% darker tile."""
 STATIC_COLOR = (0.62, 0.62, 0.60)
 KINEMATIC_COLOR = (0.30, 0.30, 0.33)
+DRIVEN_COLOR = (0.45, 0.45, 0.49)
+"""Dynamic bodies jointed to a kinematic one (a gripper's fingers): parts of the driven
+mechanism, not objects, so drawn in a lighter shade of its grey rather than the palette's."""
 DYNAMIC_PALETTE = (
     (0.22, 0.47, 0.80), (0.93, 0.55, 0.16), (0.30, 0.66, 0.30), (0.84, 0.24, 0.22),
     (0.58, 0.42, 0.76), (0.16, 0.65, 0.66), (0.92, 0.78, 0.25), (0.88, 0.50, 0.68),
@@ -370,11 +373,17 @@ def by_face(corners: np.ndarray, faces, where: str) -> np.ndarray:
 
 
 def body_colors(scene: Scene, colors: dict | None = None) -> np.ndarray:
-    """(n, 3) RGB of every body: the defaults by motion, then the overrides in ``colors``."""
+    """(n, 3) RGB of every body: the defaults by motion (a dynamic body jointed to a kinematic
+    one in DRIVEN_COLOR, the others from DYNAMIC_PALETTE in order), then the overrides in
+    ``colors``."""
     out, dynamic = np.empty((len(scene), 3)), 0
+    driven = {j.body_a for j in scene.joints
+              if j.body_b >= 0 and scene.bodies[j.body_b].motion == KINEMATIC}
     for body in scene.bodies:
         if isinstance(body.shape, Plane):
             out[body.index] = GROUND_COLOR
+        elif body.index in driven:
+            out[body.index] = DRIVEN_COLOR
         elif body.motion == DYNAMIC:
             out[body.index] = DYNAMIC_PALETTE[dynamic % len(DYNAMIC_PALETTE)]
             dynamic += 1

@@ -233,7 +233,8 @@ def test_pads_check_what_they_are_made_with_and_commanded():
                   "objects": np.array([1], dtype=np.int64), "halves": np.full((1, 3), 0.02),
                   "fixed_bodies": np.array([0], dtype=np.int64),
                   "fixed_offsets": np.zeros((1, 3)), "fixed_rotations": np.eye(3)[None],
-                  "fixed_halves": np.full((1, 3), 0.05), "low": (-1.0, -1.0, 0.0), "high": (1.0, 1.0, 1.0),
+                  "fixed_halves": np.full((1, 3), 0.05), "carried": np.zeros(0, dtype=np.int64),
+                  "carried_halves": np.zeros((0, 3)), "low": (-1.0, -1.0, 0.0), "high": (1.0, 1.0, 1.0),
                   "step_distance": STEP_DISTANCE, "step_time": 0.04}
         return Pads(**{**kwargs, **changes})
 
@@ -249,6 +250,10 @@ def test_pads_check_what_they_are_made_with_and_commanded():
         pads(fixed_bodies=np.array([3], dtype=np.int64))
     with pytest.raises(ValueError, match="Pads: fixed_rotations"):
         pads(fixed_rotations=np.eye(3))
+    with pytest.raises(ValueError, match="Pads: carried"):
+        pads(carried=np.array([3], dtype=np.int64), carried_halves=np.full((1, 3), 0.01))
+    with pytest.raises(ValueError, match="Pads: carried_halves"):
+        pads(carried=np.array([1], dtype=np.int64), carried_halves=np.full((2, 3), 0.01))
     driver = pads()
     positions = np.zeros((2, 3, 3))
     positions[:, 1] = (0.5, 0.5, 0.02)  # the box, away from the pads

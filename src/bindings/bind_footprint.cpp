@@ -18,7 +18,8 @@ void bind_footprint(nb::module_& m) {
             [](Pads* self, int64_t num_worlds, int64_t num_bodies, int64_t pad,
                std::array<double, 3> pad_half, nb::handle objects, nb::handle halves,
                nb::handle fixed_bodies, nb::handle fixed_offsets, nb::handle fixed_rotations,
-               nb::handle fixed_halves, std::array<double, 3> low, std::array<double, 3> high, double step_distance,
+               nb::handle fixed_halves, nb::handle carried, nb::handle carried_halves,
+               std::array<double, 3> low, std::array<double, 3> high, double step_distance,
                double step_time) {
                 if (num_worlds < 1) {
                     throw nb::value_error("Pads: num_worlds must be >= 1");
@@ -45,6 +46,11 @@ void bind_footprint(nb::module_& m) {
                 const auto fh = array_arg<const double>(fixed_halves, "Pads: fixed_halves", {f, 3});
                 check_indices(rows<const int64_t>(fb), 0, num_bodies, "Pads: fixed_bodies",
                               "bodies");
+                const auto cb = array_arg<const int64_t>(carried, "Pads: carried", {-1});
+                const int64_t c = extent(cb, 0);
+                const auto ch = array_arg<const double>(carried_halves, "Pads: carried_halves",
+                                                        {c, 3});
+                check_indices(rows<const int64_t>(cb), 0, num_bodies, "Pads: carried", "bodies");
                 Pads* p = new (self) Pads();
                 p->pad = pad;
                 p->pad_half = {pad_half[0], pad_half[1], pad_half[2]};
@@ -54,27 +60,33 @@ void bind_footprint(nb::module_& m) {
                 p->fixed_offsets.assign(rows<const Vec3>(fo).data, f);
                 p->fixed_rotations.assign(rows<const Mat3>(fr).data, f);
                 p->fixed_halves.assign(rows<const Vec3>(fh).data, f);
+                p->carried.assign(rows<const int64_t>(cb).data, c);
+                p->carried_halves.assign(rows<const Vec3>(ch).data, c);
                 p->low = {low[0], low[1], low[2]};
                 p->high = {high[0], high[1], high[2]};
                 p->step_distance = step_distance;
                 p->step_time = step_time;
                 p->boxes_x.assign(k, {});
                 p->boxes_r.assign(k, {});
+                p->parts_x.assign(2 + c, {});
+                p->parts_r.assign(2 + c, {});
+                p->parts_half.assign(2 + c, {});
                 p->targets.assign(num_worlds, {});
                 p->lowest.assign(num_worlds, 0.0);
             },
             nb::kw_only(), nb::arg("num_worlds"), nb::arg("num_bodies"), nb::arg("pad"),
             nb::arg("pad_half"), nb::arg("objects"), nb::arg("halves"), nb::arg("fixed_bodies"),
             nb::arg("fixed_offsets"), nb::arg("fixed_rotations"), nb::arg("fixed_halves"),
-            nb::arg("low"),
+            nb::arg("carried"), nb::arg("carried_halves"), nb::arg("low"),
             nb::arg("high"), nb::arg("step_distance"), nb::arg("step_time"),
             "B = num_worlds worlds of num_bodies bodies: pad is the pad's body index, pad_half "
             "(3,) m its half extents; objects (K,) int64 the boxes' body indices and halves "
             "(K, 3) m their half extents (the same in every world); fixed_bodies (F,) int64 the "
             "static bodies of the fixtures' box parts, fixed_offsets (F, 3) m and fixed_rotations "
             "(F, 3, 3) each part's pose in its body's frame, fixed_halves (F, 3) m its half "
-            "extents (F = 0: none); low, high (3,) m the "
-            "workspace the pad's centre stays in; step_distance m of motion per unit of action; "
+            "extents (F = 0: none); carried (C,) int64 the bodies that move with the pad (a "
+            "parallel gripper's fingers) and carried_halves (C, 3) m their half extents (C = 0: "
+            "none); low, high (3,) m the workspace the pad's centre stays in; step_distance m of motion per unit of action; "
             "step_time s per env step.")
         .def(
             "command",
@@ -93,12 +105,11 @@ void bind_footprint(nb::module_& m) {
                               "Pads.command: objects", "bodies");
                 check_indices(rows<const int64_t>(hd), -1, k, "Pads.command: held",
                               "indices into objects, -1: none");
+                check_indices(Span<const int64_t>{p.carried.data(), p.carried.size()}, 0, n,
+                              "Pads.command: carried", "bodies");
                 if (p.pad >= n) {
                     throw nb::value_error("Pads.command: the pad is not a body of positions");
                 }
-                // the parts under test are the pad and the box it holds: two at most
-                Vec3 parts_x[2], parts_half[2];
-                Mat3 parts_r[2];
                 FootprintQuery q;
                 q.positions = rows<const Vec3>(x);
                 q.rotations = rows<const Mat3>(r);
@@ -111,10 +122,12 @@ void bind_footprint(nb::module_& m) {
                 q.fixed_offsets = {p.fixed_offsets.data(), p.fixed_offsets.size()};
                 q.fixed_rotations = {p.fixed_rotations.data(), p.fixed_rotations.size()};
                 q.fixed_halves = {p.fixed_halves.data(), p.fixed_halves.size()};
+                q.carried = {p.carried.data(), p.carried.size()};
+                q.carried_halves = {p.carried_halves.data(), p.carried_halves.size()};
                 q.held = rows<const int64_t>(hd);
-                q.parts_x = {parts_x, 2};
-                q.parts_r = {parts_r, 2};
-                q.parts_half = {parts_half, 2};
+                q.parts_x = p.parts_x.span();  // the pad, the held box, the carried bodies
+                q.parts_r = p.parts_r.span();
+                q.parts_half = p.parts_half.span();
                 q.boxes_x = p.boxes_x.span();
                 q.boxes_r = p.boxes_r.span();
                 PadCommand c;
@@ -133,7 +146,7 @@ void bind_footprint(nb::module_& m) {
             nb::arg("held"),
             "One env step's command of the gripper of every world: the pad's target is its "
             "centre plus step_distance x motion, clamped to [low, high]; a downward move stops "
-            "where the pad, or the box it holds, would rest on the table, on the top of a box or "
+            "where the pad, the box it holds or a carried body would rest on the table, on the top of a box or "
             "of a fixture's box part under its footprint (never lifting the pad); the pad's velocity is set to reach the "
             "target in step_time. motions (B, 3) in [-1, 1]; positions (B, n, 3) m, rotations "
             "(B, n, 3, 3) and velocities (B, n, 3) m/s (written: the pads') of every body; held "

@@ -156,6 +156,13 @@ void lowest_centres(const FootprintQuery& q, Span<double> out) {
             q.parts_r[1] = q.rotations[first + body];
             parts = 2;
         }
+        for (int64_t c = 0; c < q.carried.size; ++c) {  // moved with the pad, as the held box
+            const int64_t body = first + q.carried[c];
+            q.parts_x[parts] = add(q.positions[body], sub(target, pad));
+            q.parts_half[parts] = q.carried_halves[c];
+            q.parts_r[parts] = q.rotations[body];
+            ++parts;
+        }
         for (int64_t k = 0; k < q.objects.size; ++k) {
             q.boxes_x[k] = q.positions[first + q.objects[k]];
             q.boxes_r[k] = q.rotations[first + q.objects[k]];

@@ -33,18 +33,22 @@ struct FootprintQuery {
     Span<const Vec3> fixed_offsets;    // (F,) m
     Span<const Mat3> fixed_rotations;  // (F,)
     Span<const Vec3> fixed_halves;     // (F,) m
-    // Work rows, overwritten world by world: the parts (the pad, then the held box) and the
-    // boxes of the world in hand.
-    Span<Vec3> parts_x;     // (2,) m
-    Span<Mat3> parts_r;     // (2,)
-    Span<Vec3> parts_half;  // (2,) m
+    // The bodies that move with the pad (a parallel gripper's fingers), C of them, boxes of
+    // half extents carried_halves[i]; C may be 0 (the suction pad).
+    Span<const int64_t> carried;        // (C,) body indices
+    Span<const Vec3> carried_halves;    // (C,) m
+    // Work rows, overwritten world by world: the parts (the pad, then the held box, then the
+    // carried bodies) and the boxes of the world in hand.
+    Span<Vec3> parts_x;     // (2 + C,) m
+    Span<Mat3> parts_r;     // (2 + C,)
+    Span<Vec3> parts_half;  // (2 + C,) m
     Span<Vec3> boxes_x;     // (K,) m
     Span<Mat3> boxes_r;     // (K,)
 };
 
 // For the gripper of every world: the lowest z (m) its centre may take at its target, into
-// out (B,). That is where one of its parts (the pad, and the object it holds, at the target)
-// would rest on the table or on the top of one of the boxes, or of the fixtures' box parts,
+// out (B,). That is where one of its parts (the pad, the object it holds and the carried
+// bodies, at the target) would rest on the table or on the top of one of the boxes, or of the fixtures' box parts,
 // under its footprint. A box counts as under a part if its top is below the part's bottom
 // before the move (the part's bottom at the target minus the move's z, m); the held box is
 // ignored.
@@ -79,11 +83,16 @@ struct Pads {
     Array<Vec3> fixed_offsets;    // (F,) m
     Array<Mat3> fixed_rotations;  // (F,)
     Array<Vec3> fixed_halves;     // (F,) m
+    Array<int64_t> carried;       // (C,) bodies moved with the pad (FootprintQuery), C may be 0
+    Array<Vec3> carried_halves;   // (C,) m
     Vec3 low = {}, high = {};    // m, the workspace the pad's centre stays in
     double step_distance = 0;    // m of motion per unit, along each axis
     double step_time = 0;        // s, the env step
     Array<Vec3> boxes_x;         // (K,) work rows of FootprintQuery
     Array<Mat3> boxes_r;         // (K,)
+    Array<Vec3> parts_x;         // (2 + C,) work rows of FootprintQuery
+    Array<Mat3> parts_r;         // (2 + C,)
+    Array<Vec3> parts_half;      // (2 + C,) m
     Array<Vec3> targets;         // (B,) work rows of PadCommand
     Array<double> lowest;        // (B,)
 };

@@ -1,0 +1,175 @@
+"""The floating two-finger parallel gripper (``effector="gripper"``), sized after Franka
+Panda's hand: one per world of a World, holding by friction alone.
+
+    env = gym.make("rigid_gym/PickAndPlace-v0", effector="gripper")
+
+* **The hand** is a kinematic box driven exactly as the suction pad is (``envs/effector.py``:
+  the first three action entries move it by up to ``STEP_DISTANCE`` per axis per env step,
+  within ``GRIPPER_WORKSPACE``; it never turns) with the arm's force limit: a downward move
+  stops where the hand, a finger or the cube held between the fingers would rest on the
+  table, on a cube or on a fixture's box part under its footprint. Sideways nothing stops it.
+* **The fingers** are two dynamic boxes on prismatic joints to the hand, sliding along the
+  world's y axis, each driven by a joint motor of at most ``GRIP_FORCE`` (Panda's 70 N
+  continuous force): the opening between the pads runs from 0 to ``MAX_OPENING`` (8 cm, as
+  Panda's), and the pads (``FINGER_HALF_EXTENTS``: 2 cm wide, 5 cm long) take a 4 cm cube
+  over most of a face.
+* **The finger command** (the fourth action entry, a in [-1, 1]) is a velocity target of
+  the opening: each motor drives its finger at a * ``FINGER_SPEED`` / 2 m/s outward, with at
+  most ``GRIP_FORCE``; a > 0 opens, a < 0 closes (panda-gym's and Fetch's sign). It is
+  panda-gym's convention in effect: panda-gym sets the target opening to the current opening
+  plus 0.2 a each step, a target that moves with the fingers, so a rate; here the rate is
+  the joint motor's own input (a velocity motor with a force limit), which needs no position
+  gains, and closing on a cube at any a < 0 presses it with the full ``GRIP_FORCE`` (the
+  motor saturates against it). At a = 0 the motors hold the opening but no longer press: a
+  held cube needs a < 0 for as long as it is to be held.
+* **No weld.** A cube is carried only by the friction between it and the pads: it stays
+  while its weight and the hand's accelerations need less than 2 mu ``GRIP_FORCE`` (mu the
+  pair's Coulomb coefficient) and slips otherwise. ``holding`` reports the cube lying
+  between the pads with both touching it (the observation's ``holding`` flag).
+
+Observations gain the opening (``fingers.width``, m) after the holding flag, as panda-gym's
+hold the fingers' width; the hand's fields are named ``hand.position``, ``hand.velocity``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from rigid_gym.shapes import Box
+
+from .effector import FloatingEffector, SuctionGripper, Workspace
+from .task import FRICTION
+
+HAND_HALF_EXTENTS = (0.02, 0.055, 0.02)
+"""m: the hand's box (4 x 11 x 4 cm), wide enough along y to carry the fingers at full
+opening."""
+FINGER_HALF_EXTENTS = (0.01, 0.006, 0.025)
+"""m: each finger's box (2 cm wide along x, 1.2 cm thick along y, 5 cm long), hanging from
+the hand's bottom."""
+FINGER_MASS = 0.015
+"""kg: each finger's mass (Panda's fingers, about 15 g)."""
+FINGER_FRICTION = FRICTION
+"""Coulomb coefficient of the fingers' pads (with a cube of 0.5 the pair's is 0.5)."""
+MAX_OPENING = 0.08
+"""m: the widest opening between the pads (Panda's 8 cm); the narrowest is 0."""
+GRIP_FORCE = 70.0
+"""N: each finger motor's maximum force (Panda's continuous grip force)."""
+FINGER_SPEED = 0.5
+"""m/s: the opening's rate at finger command 1 (2 cm per env step; a full close in 4)."""
+FINGER_DROP = HAND_HALF_EXTENTS[2] + 2.0 * FINGER_HALF_EXTENTS[2]
+"""m from the hand's centre down to the fingers' tips."""
+GRIPPER_START = (0.0, 0.0, 0.15)
+"""m: the hand's centre at reset (the fingers' tips 8 cm above the table, open)."""
+GRIPPER_WORKSPACE = Workspace(low=(-0.25, -0.25, FINGER_DROP), high=(0.25, 0.25, 0.32))
+"""The box the hand's centre stays in: the pad's x, y; z from the fingers' tips on the table
+up to where a cube held near its bottom is as high as the pad can carry one."""
+HOLD_MARGIN = 0.002
+"""m: a cube counts as held while both pads are within this of its faces."""
+TOP_GRASP = 0.03
+"""m of an object's top that the fingers take when it is taken by its top (Insert's peg)."""
+
+
+class ParallelGripper(FloatingEffector):
+    """Drives the hand ``body`` (a kinematic Box of ``HAND_HALF_EXTENTS``) and its two fingers
+    ``fingers`` (the carried bodies: the one towards -y, then the one towards +y) in every
+    world of ``world``; ``FloatingEffector`` gives the arguments, the module docstring the
+    behaviour. ``joints``: the fingers' prismatic joints, in the fingers' order (each one's
+    coordinate is its finger's travel inward from the full opening, m)."""
+
+    body_half = HAND_HALF_EXTENTS
+    carried_half = FINGER_HALF_EXTENTS
+    workspace = GRIPPER_WORKSPACE
+    start = GRIPPER_START
+    top_grip = FINGER_DROP - TOP_GRASP
+    """m from the top of an object the fingers take by its top to the hand's centre."""
+
+    def __init__(self, world, bodies, objects, half_extents, step_time: float, fixtures=()):
+        super().__init__(world, bodies, objects, half_extents, step_time, fixtures)
+        self.fingers = self.carried
+        self.joints = np.array([next(j.index for j in world.scene.joints if j.body_a == finger)
+                                for finger in self.fingers.tolist()], dtype=np.int64)
+
+    @classmethod
+    def add_to(cls, scene) -> list[int]:
+        """Add the hand, at ``start``, and the fingers, open, each on a prismatic joint along
+        y whose motor is limited to GRIP_FORCE and whose travel inward is [0, MAX_OPENING / 2]
+        m; returns [hand, finger -y, finger +y]."""
+        hand = scene.add_body(Box(HAND_HALF_EXTENTS), kinematic=True, position=cls.start,
+                              friction=FRICTION, name="hand")
+        bodies = [hand]
+        x, y, z = cls.start
+        finger_z = z - HAND_HALF_EXTENTS[2] - FINGER_HALF_EXTENTS[2]
+        for k, side in enumerate((-1.0, 1.0)):
+            centre = (x, y + side * (0.5 * MAX_OPENING + FINGER_HALF_EXTENTS[1]), finger_z)
+            finger = scene.add_body(Box(FINGER_HALF_EXTENTS), mass=FINGER_MASS, position=centre,
+                                    friction=FINGER_FRICTION, name=f"finger{k}")
+            scene.add_prismatic_joint(finger, hand, centre, (0.0, -side, 0.0),
+                                      limits=(0.0, 0.5 * MAX_OPENING),
+                                      max_motor_force=GRIP_FORCE, name=f"finger{k}_slide")
+            bodies.append(finger)
+        return bodies
+
+    def command(self, motions: np.ndarray, grips: np.ndarray | None) -> None:
+        """Start an env step in every world: ``motions`` (B, 3) in [-1, 1] scale
+        ``STEP_DISTANCE``; ``grips`` (B,) in [-1, 1] the finger commands (the opening's rate
+        over ``FINGER_SPEED``: > 0 opens, < 0 closes)."""
+        self.move(motions, self.holding(slice(None)))
+        speeds = np.zeros(self.num_worlds) if grips is None else -0.5 * FINGER_SPEED * grips
+        # the motors' targets written as World.set_joint_motor would, without its checks (the
+        # commands are finite and clipped); a world whose targets change is woken, as that
+        # call wakes it: sleeping cannot see a motor's target
+        targets = self.world.core.joint_motor_speed
+        changed = np.flatnonzero(targets[:, self.joints[0]] != speeds)
+        for joint in self.joints.tolist():
+            targets[:, joint] = speeds
+        for world in changed.tolist():
+            self.world.core.forget(world, world + 1)
+
+    def holding(self, worlds) -> np.ndarray:
+        """(k,) int64: the cube each of ``worlds`` (an index array, or slice(None)) holds now
+        (an index into ``objects``; the first if several), -1 for none. A cube is held where
+        its centre lies between the pads (along y, and within their reach along x and z) and
+        its extent along y spans the gap between them to within HOLD_MARGIN on each side,
+        so that both pads touch it: a test of the poses, which says nothing about whether
+        friction will keep it there."""
+        s = self.world.state
+        x = s.position[worlds]  # (k, n, 3)
+        low = x[:, self.fingers[0], 1] + FINGER_HALF_EXTENTS[1]  # the inner faces (k,)
+        high = x[:, self.fingers[1], 1] - FINGER_HALF_EXTENTS[1]
+        pad = x[:, self.fingers[0]]  # the pads' x and z (each finger's, the hand's)
+        centres = x[:, self.objects]  # (k, K, 3)
+        # each cube's half extent along every world axis, whatever its turn
+        extents = np.einsum("wkij,kj->wki", np.abs(s.rotation[worlds][:, self.objects]),
+                            self.half_extents)
+        y = centres[..., 1]
+        spans = ((y - extents[..., 1] <= low[:, None] + HOLD_MARGIN)
+                 & (y + extents[..., 1] >= high[:, None] - HOLD_MARGIN)
+                 & (y > low[:, None]) & (y < high[:, None]))
+        reach = ((np.abs(centres[..., 0] - pad[:, None, 0])
+                  < FINGER_HALF_EXTENTS[0] + extents[..., 0])
+                 & (np.abs(centres[..., 2] - pad[:, None, 2])
+                    < FINGER_HALF_EXTENTS[2] + extents[..., 2]))
+        held = spans & reach
+        return np.where(held.any(axis=1), np.argmax(held, axis=1), -1).astype(np.int64)
+
+    @property
+    def held(self) -> np.ndarray:
+        """(B,) int64: the cube each world's gripper holds now (``holding``), -1 for none."""
+        return self.holding(slice(None))
+
+    def widths(self, worlds) -> np.ndarray:
+        """(k,) m: the opening between the pads in each of ``worlds`` (an index array, or
+        slice(None))."""
+        y = self.world.state.position[worlds][:, self.fingers, 1]
+        return y[:, 1] - y[:, 0] - 2.0 * FINGER_HALF_EXTENTS[1]
+
+    def forget(self, worlds) -> None:
+        """``worlds`` were reset (the fingers are open again, at the scene's start): their
+        motors' targets go back to 0 (holding the opening)."""
+        targets = self.world.core.joint_motor_speed
+        for joint in self.joints.tolist():
+            targets[worlds, joint] = 0.0
+
+
+EFFECTOR_CLASSES = {"pad": SuctionGripper, "gripper": ParallelGripper}
+"""Effector name (``rigid_gym.envs.task.EFFECTORS``) -> its class."""
