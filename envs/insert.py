@@ -10,7 +10,7 @@ from rigid_gym.recordable import Marker
 from rigid_gym.shapes import Box, Compound, Pose
 
 from .base import RigidGymEnv
-from .effector import PAD_HALF_EXTENTS
+from .gripper import EFFECTOR_CLASSES
 from .task import (
     CUBE_HALF,
     GOAL_COLOR,
@@ -109,8 +109,8 @@ class Insert(Task):
 
     def shaped_reward(self, pad, held, achieved_goal, desired_goal, half):
         peg_half = self.half_extents(half[:, :1])[:, 0]
-        grip = achieved_goal.copy()  # where the pad's centre holds the peg: on its top
-        grip[:, 2] += peg_half[:, 2] + PAD_HALF_EXTENTS[2]
+        grip = achieved_goal.copy()  # where the pad's (the hand's) centre takes the peg's top
+        grip[:, 2] += peg_half[:, 2] + EFFECTOR_CLASSES[self.effector].top_grip
         above = desired_goal.copy()  # the peg over the hole, its bottom just above the block
         above[:, 2] += HOLE_DEPTH + ABOVE_HOLE
         error = np.abs(achieved_goal - desired_goal)

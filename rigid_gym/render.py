@@ -49,7 +49,7 @@ GROUND_COLOR = (0.90, 0.86, 0.79)
 """Plane bodies (light wood); their patch alternates it with a 6% darker tile."""
 STATIC_COLOR = (0.62, 0.62, 0.60)
 KINEMATIC_COLOR = (0.30, 0.30, 0.33)
-DRIVEN_COLOR = (0.45, 0.45, 0.49)
+DRIVEN_COLOR = (0.58, 0.58, 0.62)
 """Dynamic bodies jointed to a kinematic one (a gripper's fingers): parts of the driven
 mechanism, not objects, so drawn in a lighter shade of its grey rather than the palette's."""
 DYNAMIC_PALETTE = (
