@@ -16,6 +16,13 @@ namespace rg {
 
 enum Motion : int32_t { STATIC = 0, KINEMATIC = 1, DYNAMIC = 2 };
 
+// The part of a wrench on a jointed body that moves it (solver/mobility.h): the wrench
+// (linear N s, angular N m s about the centre of mass) as a 6-vector f goes to g f, what its
+// joints do not take.
+struct Mobility {
+    double g[6][6];  // g[row][column]
+};
+
 struct BodyStates {
     Span<Vec3> position;
     Span<Quat> orientation;
@@ -29,6 +36,9 @@ struct BodyStates {
     // orientations do not change until the position update, so the impulse stages apply it
     // as one matrix product per use
     Span<Mat3> inverse_inertia;
+    // each articulated body's Mobility at the step's poses (BodyModel::articulated; empty
+    // where the scene has none), formed with I(t)^-1
+    Span<Mobility> mobility;
 };
 
 // What stays fixed while stepping. Per-body parameters may differ between worlds (domain
@@ -39,6 +49,8 @@ struct BodyModel {
     Span<const Vec3> inverse_moments;     // principal 1/kg m^2, 0 on degenerate axes
     Span<const double> friction;          // a pair uses sqrt(mu_a mu_b)
     Span<const double> restitution;       // a pair uses max(e_a, e_b)
+    Span<const uint8_t> articulated;      // 1: a contact moves the body as its joints let it
+                                          // (solver/mobility.h), shared by the worlds
     Vec3 gravity;                         // m/s^2
 };
 

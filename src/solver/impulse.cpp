@@ -8,6 +8,10 @@ namespace rg {
 
 namespace {
 
+// Below this share of its scale a matrix's determinant, or n^T K n, is round-off: K is
+// singular (a jointed pair's, impulse.h).
+constexpr double SINGULAR_K = 1e-12;
+
 // k^-1 b for a symmetric positive definite k (adjugate / determinant).
 Vec3 solve3(const Mat3& k, Vec3 b) {
     const double a00 = k.m[0][0], a01 = k.m[0][1], a02 = k.m[0][2];
@@ -100,6 +104,21 @@ Vec3 contact_impulse(const Mat3& k, Vec3 v, Vec3 n, double e, double mu) {
         return frictionless_impulse(k, n, vn, e);
     }
     return j;
+}
+
+Vec3 jointed_contact_impulse(const Mat3& k, Vec3 v, Vec3 n, double e, double mu) {
+    const double trace = k.m[0][0] + k.m[1][1] + k.m[2][2];
+    const double a00 = k.m[0][0], a01 = k.m[0][1], a02 = k.m[0][2];
+    const double a11 = k.m[1][1], a12 = k.m[1][2], a22 = k.m[2][2];
+    const double det = a00 * (a11 * a22 - a12 * a12) + a01 * (a02 * a12 - a01 * a22) +
+                       a02 * (a01 * a12 - a02 * a11);
+    if (det > SINGULAR_K * trace * trace * trace / 27.0) {
+        return contact_impulse(k, v, n, e, mu);
+    }
+    if (!(quadratic(k, n, n) > SINGULAR_K * trace)) {
+        return {0.0, 0.0, 0.0};
+    }
+    return frictionless_impulse(k, n, v.x * n.x + v.y * n.y + v.z * n.z, e);
 }
 
 }  // namespace rg

@@ -34,4 +34,16 @@ void add_point_mass_matrix(double inverse_mass, const Mat3& inverse_inertia, Vec
 // coefficient mu, given the summed matrix k. v_n must be < 0.
 Vec3 contact_impulse(const Mat3& k, Vec3 v, Vec3 n, double e, double mu);
 
+// contact_impulse where k may be singular: a pair with an articulated body (mobility.h),
+// whose contact point moves only along the directions its joints let it (a finger on a
+// prismatic joint along the axis, a hinged body across its lever). Of full rank (det k above
+// SINGULAR_K of trace(k)^3 / 27, a free body beside the jointed one), it is contact_impulse.
+// Else the impulse changes v only within k's range: the normal condition v_n -> -e v_n
+// fixes the outcome along a single direction t (k = c t t^T: every impulse with the same t.j
+// gives it), so the frictionless impulse, inside every friction cone, is the one; for a
+// range of two directions the same frictionless impulse is used (friction across the
+// pair's two jointed motions is left out); with n^T k n below SINGULAR_K trace(k) the pair
+// cannot move along n and gets none.
+Vec3 jointed_contact_impulse(const Mat3& k, Vec3 v, Vec3 n, double e, double mu);
+
 }  // namespace rg

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "solver/mobility.h"
+
 namespace rg {
 
 namespace {
@@ -550,6 +552,29 @@ void stabilize_joint_positions(StepContext& w, double dt) {
     for_awake_components(w, [&](int64_t first, int64_t last) {
         stabilize_component(w, dt, first, last);
     });
+}
+
+void form_joint_mobility(StepContext& w) {
+    const JointRows& joints = w.joints;
+    for (int64_t c = 0; c + 1 < joints.component_start.size; ++c) {
+        const int64_t first = joints.component_start[c], last = joints.component_start[c + 1];
+        const int body = joints.body_a[joints.order[first]];
+        if (!w.model.articulated[body]) {
+            continue;
+        }
+        int count = 0;  // the component's joints all hold `body` (its a) to immovable bodies
+        for (int64_t k = first; k < last; ++k) {
+            const int64_t j = joints.order[k];
+            Rows rows;
+            build_rows(joints, j, frame_of(w, body, 0.0), frame_of(w, joints.body_b[j], 0.0),
+                       rows);
+            for (int p = 0; p < rows.count; ++p) {
+                joints.rows[count++] = rows.row[p];
+            }
+        }
+        form_mobility(w.model.inverse_mass[body], w.bodies.inverse_inertia[body],
+                      joints.rows.data, count, w.bodies.mobility[body]);
+    }
 }
 
 double joint_coordinate(const StepContext& w, int64_t j) {

@@ -84,6 +84,10 @@ void stabilize_joint_positions(StepContext& w, double dt);
 // 10-link chain's, would show as energy the bodies do not have).
 void project_joint_velocities(StepContext& w, double dt);
 
+// Each articulated body's Mobility (mobility.h) at the current poses from its joints'
+// equality rows, with I(t)^-1 as formed for the step: before the impulse stages.
+void form_joint_mobility(StepContext& w);
+
 // Joint j's coordinate at the bodies' current poses: rad (revolute), m (prismatic), 0 (fixed).
 double joint_coordinate(const StepContext& w, int64_t j);
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <optional>
 
+#include "solver/mobility.h"
+
 namespace rg {
 
 namespace {
@@ -53,6 +55,33 @@ void add_body_wrench_matrix(double inverse_mass, const Mat3& inverse_inertia, Ve
             big[3 + i][3 + j] += w[i][j];
         }
         big[j][j] += inverse_mass;
+    }
+}
+
+// Body i's change of angular velocity for j at lever r plus the angular impulse m, and its
+// spin compliance about n (n . I^-1 n), through its joints where it is articulated
+// (mobility.h).
+void spin_response(const BodyStates& bodies, const BodyModel& model, int i, Vec3 r, Vec3 j,
+                   Vec3 m, Vec3 n, Vec3& dw, double& compliance) {
+    const Mat3& wi = bodies.inverse_inertia[i];
+    if (!model.articulated[i]) {
+        dw = rotate(wi, add(cross(r, j), m));
+        compliance = dot(rotate(wi, n), n);
+        return;
+    }
+    Vec3 dv, turn;
+    articulated_response(bodies, model, i, j, add(cross(r, j), m), dv, dw);
+    articulated_response(bodies, model, i, {0.0, 0.0, 0.0}, n, dv, turn);
+    compliance = dot(turn, n);
+}
+
+// add_body_wrench_matrix for body i, through its joints where it is articulated (mobility.h).
+void add_wrench_matrix(const BodyStates& bodies, const BodyModel& model, int i, Vec3 r,
+                       Matrix6& big) {
+    if (model.articulated[i]) {
+        add_articulated_wrench_matrix(bodies, model, i, r, big);
+    } else {
+        add_body_wrench_matrix(model.inverse_mass[i], bodies.inverse_inertia[i], r, big);
     }
 }
 
@@ -214,11 +243,20 @@ Vec3 moment(const Vec3* d, const double* sol, int first, int k) {
     return m;
 }
 
-// sign (j at lever r, plus angular impulse m) on body i: V += j/M, L += r x j + m.
+// sign (j at lever r, plus angular impulse m) on body i: V += j/M, L += r x j + m (of the
+// part that its joints let through, for an articulated body: mobility.h).
 void apply_wrench(const BodyStates& bodies, const BodyModel& model, int i, double sign, Vec3 j,
                   Vec3 m, Vec3 r) {
     const double inv = model.inverse_mass[i];
     const Vec3 l = cross(r, j);
+    if (model.articulated[i]) {  // what its joints let through (mobility.h)
+        Vec3 linear = scale(sign, j), angular = scale(sign, add(l, m));
+        admit(bodies, model, i, linear, angular);
+        bodies.velocity[i] = add(bodies.velocity[i], scale(inv, linear));
+        bodies.angular_momentum[i] = add(bodies.angular_momentum[i], angular);
+        bodies.angular_velocity[i] = rotate(bodies.inverse_inertia[i], bodies.angular_momentum[i]);
+        return;
+    }
     Vec3& v = bodies.velocity[i];
     v = {v.x + sign * j.x * inv, v.y + sign * j.y * inv, v.z + sign * j.z * inv};
     Vec3& momentum = bodies.angular_momentum[i];
@@ -252,6 +290,30 @@ struct PairLevers {
 // n . (relative velocity change at q per unit impulse n at p): GBF's K_qp, along n.
 double normal_coupling(const PairLevers& pair, Vec3 n, Vec3 q, Vec3 p) {
     double k = 0.0;
+    const int bodies[2] = {pair.a, pair.b};
+    const bool movable[2] = {pair.movable.a, pair.movable.b};
+    const Vec3 centres[2] = {pair.centre_a, pair.centre_b};
+    bool articulated = false;
+    for (int s = 0; s < 2; ++s) {
+        if (movable[s] && pair.model.articulated[bodies[s]]) {  // mobility.h
+            articulated = true;
+        }
+    }
+    if (articulated) {
+        for (int s = 0; s < 2; ++s) {
+            if (movable[s]) {
+                const Vec3 rp = sub(p, centres[s]), rq = sub(q, centres[s]);
+                Vec3 dv = scale(pair.model.inverse_mass[bodies[s]], n);
+                Vec3 dw = rotate(pair.bodies.inverse_inertia[bodies[s]], cross(rp, n));
+                if (pair.model.articulated[bodies[s]]) {
+                    articulated_response(pair.bodies, pair.model, bodies[s], n, cross(rp, n),
+                                         dv, dw);
+                }
+                k += dot(n, add(dv, cross(dw, rq)));
+            }
+        }
+        return k;
+    }
     if (pair.movable.a) {
         const Vec3 rp = sub(p, pair.centre_a), rq = sub(q, pair.centre_a);
         k += pair.model.inverse_mass[pair.a] +
@@ -448,14 +510,18 @@ void apply_with_spin_friction(const BodyStates& bodies, const BodyModel& model, 
     Vec3 spin = sub(bodies.angular_velocity[a], bodies.angular_velocity[b]);
     double compliance = 0.0;
     if (movable.a) {
-        const Mat3& wa = bodies.inverse_inertia[a];
-        spin = add(spin, rotate(wa, add(cross(ra, j), m)));
-        compliance += dot(rotate(wa, n), n);
+        Vec3 dw;
+        double turn;
+        spin_response(bodies, model, a, ra, j, m, n, dw, turn);
+        spin = add(spin, dw);
+        compliance += turn;
     }
     if (movable.b) {
-        const Mat3& wb = bodies.inverse_inertia[b];
-        spin = add(spin, rotate(wb, add(cross(rb, j), m)));
-        compliance += dot(rotate(wb, n), n);
+        Vec3 dw;
+        double turn;
+        spin_response(bodies, model, b, rb, j, m, n, dw, turn);
+        spin = add(spin, dw);
+        compliance += turn;
     }
     if (compliance > 0.0) {
         const double t = std::min(std::max(-dot(spin, n) / compliance, -limit), limit);
@@ -644,10 +710,10 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
     }
     Matrix6 big = {};
     if (movable.a) {
-        add_body_wrench_matrix(model.inverse_mass[a], bodies.inverse_inertia[a], f.ra, big);
+        add_wrench_matrix(bodies, model, a, f.ra, big);
     }
     if (movable.b) {
-        add_body_wrench_matrix(model.inverse_mass[b], bodies.inverse_inertia[b], f.rb, big);
+        add_wrench_matrix(bodies, model, b, f.rb, big);
     }
     const Targets target = normal_targets(pair, lever, set, seed, count, f.c, f.n, f.t1, f.t2,
                                           f.edge, f.tips, f.d, f.vn, f.w, e, dt);

@@ -14,8 +14,10 @@
 // between bodies keeps momentum.
 #include <algorithm>
 
+
 #include "solver/contacts.h"
 #include "solver/levels.h"
+#include "solver/mobility.h"
 #include "solver/solver.h"
 
 namespace rg {
@@ -177,10 +179,11 @@ int64_t apply_reactions(StepContext& w) {
     const BodyStates& s = w.bodies;
     int64_t lowest = w.graph.level.size;
     for (int i = 0; i < n; ++i) {
-        const Vec3 p = w.reaction[i], l = w.reaction[n + i];
+        Vec3 p = w.reaction[i], l = w.reaction[n + i];
         if (p.x == 0.0 && p.y == 0.0 && p.z == 0.0 && l.x == 0.0 && l.y == 0.0 && l.z == 0.0) {
             continue;
         }
+        admit(s, w.model, i, p, l);  // what an articulated body's joints let through
         s.velocity[i] = add(s.velocity[i], scale(w.model.inverse_mass[i], p));
         s.angular_momentum[i] = add(s.angular_momentum[i], l);
         s.angular_velocity[i] = rotate(s.inverse_inertia[i], s.angular_momentum[i]);

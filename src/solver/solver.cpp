@@ -7,6 +7,7 @@
 
 #include "solver/contacts.h"
 #include "solver/impulse.h"
+#include "solver/mobility.h"
 
 namespace rg {
 
@@ -472,13 +473,22 @@ int resolve_patches(StepContext& w, int a, Movable movable, const ContactSet& se
             continue;
         }
         Mat3 k = {};
+        const bool jointed = (movable.a && model.articulated[a]) || (movable.b && model.articulated[b]);
+        const auto add_body = [&](int i, Vec3 r) {
+            if (model.articulated[i]) {
+                add_articulated_point_matrix(s, model, i, r, k);  // mobility.h
+            } else {
+                add_point_mass_matrix(model.inverse_mass[i], s.inverse_inertia[i], r, k);
+            }
+        };
         if (movable.a) {
-            add_point_mass_matrix(model.inverse_mass[a], s.inverse_inertia[a], ra, k);
+            add_body(a, ra);
         }
         if (movable.b) {
-            add_point_mass_matrix(model.inverse_mass[b], s.inverse_inertia[b], rb, k);
+            add_body(b, rb);
         }
-        const Vec3 j = contact_impulse(k, v, n, single_e, mu);
+        const Vec3 j = jointed ? jointed_contact_impulse(k, v, n, single_e, mu)
+                               : contact_impulse(k, v, n, single_e, mu);
         if (mu > 0.0 && radius > 0.0) {
             apply_with_spin_friction(s, model, a, b, movable, j, {0.0, 0.0, 0.0}, ra, rb, n,
                                      mu * dot(j, n) * radius);

@@ -232,6 +232,7 @@ Batch::Batch(int num_worlds, Geometry geometry, std::vector<int32_t> body_motion
     rotation.assign(b * n, {});
     inverse_inertia.assign(b * n, {});
     motion.assign(body_motion.data(), n);
+    articulated.assign(n, 0);  // none until set_joints
     inverse_mass.assign(b * n, 0.0);
     friction.assign(b * n, 0.0);
     restitution.assign(b * n, 0.0);
@@ -352,6 +353,22 @@ void Batch::set_joints(Array<int32_t> kind, Array<int32_t> body_a, Array<int32_t
     starts.push_back(static_cast<int64_t>(order.size()));
     m.order.assign(order.data(), static_cast<int64_t>(order.size()));
     m.component_start.assign(starts.data(), static_cast<int64_t>(starts.size()));
+    // articulated: body_a of its joints, each to an immovable body (then no joint's body_a
+    // is joined to it: body_a is dynamic)
+    std::vector<uint8_t> leaf(num_bodies_, 0);
+    for (int64_t k = 0; k < j; ++k) {
+        leaf[m.body_a[k]] = 1;
+    }
+    for (int64_t k = 0; k < j; ++k) {
+        const int32_t q = m.body_b[k];
+        if (q >= 0 && motion[q] == DYNAMIC) {
+            leaf[m.body_a[k]] = 0;
+            leaf[q] = 0;
+        }
+    }
+    articulated.assign(leaf.data(), num_bodies_);
+    const bool any = std::find(leaf.begin(), leaf.end(), 1) != leaf.end();
+    mobility.assign(any ? static_cast<int64_t>(num_worlds_) * num_bodies_ : 0, Mobility{});
     m.allocate(num_worlds_, num_bodies_);
     stages_ = stage_rules(settings_, gravity_length_ > 0.0, j > 0);
     forget(0, num_worlds_);
@@ -386,12 +403,14 @@ StepContext Batch::world(int w) {
     bodies.force = world_rows(force, w, n);
     bodies.torque = world_rows(torque, w, n);
     bodies.inverse_inertia = world_rows(inverse_inertia, w, n);
+    bodies.mobility = mobility.size() > 0 ? world_rows(mobility, w, n) : Span<Mobility>{};
     BodyModel& model = s.model;
     model.motion = {motion.data(), n};
     model.inverse_mass = read_rows(inverse_mass, w, n);
     model.inverse_moments = read_rows(inverse_moments, w, n);
     model.friction = read_rows(friction, w, n);
     model.restitution = read_rows(restitution, w, n);
+    model.articulated = {articulated.data(), n};
     model.gravity = gravity;
     s.attached.parent = world_rows(attach_parent, w, n);
     s.attached.offset_position = world_rows(attach_offset_position, w, n);

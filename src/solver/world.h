@@ -298,7 +298,9 @@ public:
 
     // The scene's J joints (joint_rows.h: kinds, bodies, anchors, axes and references),
     // every world's limits open and motors off (set through `joints`' per-world rows); made
-    // once, before stepping. Switches the joint stages on (stages.h) where J > 0.
+    // once, before stepping. Switches the joint stages on (stages.h) where J > 0, and marks
+    // the articulated bodies (solver/mobility.h): those whose every joint holds them to a
+    // static or kinematic body or the world frame, and no joint to them.
     void set_joints(Array<int32_t> kind, Array<int32_t> body_a, Array<int32_t> body_b,
                     Array<Vec3> anchor_a, Array<Vec3> anchor_b, Array<Vec3> axis_a,
                     Array<Vec3> axis_b, Array<Quat> reference);
@@ -312,7 +314,9 @@ public:
     Array<Quat> orientation;
     Array<Mat3> rotation;
     Array<Mat3> inverse_inertia;  // derived in the step (body.h), not seen by Python
+    Array<Mobility> mobility;     // (B, n) where a body is articulated, else empty: the same
     Array<int32_t> motion;  // (n,)
+    Array<uint8_t> articulated;  // (n,) BodyModel::articulated, set by set_joints
     Array<double> inverse_mass, friction, restitution;
     Array<Vec3> inverse_moments;
     Vec3 gravity;
