@@ -19,9 +19,21 @@ Panda's hand: one per world of a World, holding by friction alone.
   panda-gym's convention in effect: panda-gym sets the target opening to the current opening
   plus 0.2 a each step, a target that moves with the fingers, so a rate; here the rate is
   the joint motor's own input (a velocity motor with a force limit), which needs no position
-  gains, and closing on a cube at any a < 0 presses it with the full ``GRIP_FORCE`` (the
-  motor saturates against it). At a = 0 the motors hold the opening but no longer press: a
-  held cube needs a < 0 for as long as it is to be held.
+  gains. The solver's velocity motor presses a finger that what it closes on stops every
+  step with the force that would bring it to its target speed within a solver step (its mass
+  times the speed over dt: 5 N at the closing speed), so where both pads are on a cube
+  (``holding``) and the command closes, the motors are driven at ``press_speed`` instead,
+  the speed at which that force is ``GRIP_FORCE`` (as a real gripper's grasp closes at a
+  speed until contact, then holds a force). So closing on a cube at any a < 0 presses it
+  with 70 N from the env step after the pads meet it. At a = 0 the motors hold the opening
+  but no longer press: a held cube needs a < 0 for as long as it is to be held.
+* **The fingers are driven apart from each other.** Two force-limited motors pressing a
+  cube from both sides leave the three free to slide together along y but for the motors'
+  difference: when the hand's velocity along y jumps, the cube and the fingers lag and
+  are brought back by the motor that is not saturated (about a centimetre at a jump of
+  1.25 m/s). Panda's fingers share one spindle drive, which holds them together; with two
+  joints to the hand, limits that held one finger still would meet the contact response,
+  which moves a finger along its free axis regardless of its limits.
 * **No weld.** A cube is carried only by the friction between it and the pads: it stays
   while its weight and the hand's accelerations need less than 2 mu ``GRIP_FORCE`` (mu the
   pair's Coulomb coefficient) and slips otherwise. ``holding`` reports the cube lying
@@ -46,8 +58,12 @@ opening."""
 FINGER_HALF_EXTENTS = (0.01, 0.006, 0.025)
 """m: each finger's box (2 cm wide along x, 1.2 cm thick along y, 5 cm long), hanging from
 the hand's bottom."""
-FINGER_MASS = 0.015
-"""kg: each finger's mass (Panda's fingers, about 15 g)."""
+FINGER_MASS = 0.08
+"""kg: each finger's mass. Panda's finger is about 15 g; the finger here carries its share
+of the drive as well, because a stopped finger's motor presses with FINGER_MASS times its
+target speed per solver step, and the contact stage holds a pressing finger steadily only
+while that speed moves it less than about 2 mm per solver step: at 80 g, GRIP_FORCE needs
+3.5 m/s (1.4 mm per step); at 15 g it would need 18.7 m/s, and the squeeze would chatter."""
 FINGER_FRICTION = FRICTION
 """Coulomb coefficient of the fingers' pads (with a cube of 0.5 the pair's is 0.5)."""
 MAX_OPENING = 0.08
@@ -88,6 +104,9 @@ class ParallelGripper(FloatingEffector):
         self.fingers = self.carried
         self.joints = np.array([next(j.index for j in world.scene.joints if j.body_a == finger)
                                 for finger in self.fingers.tolist()], dtype=np.int64)
+        self.press_speed = GRIP_FORCE * world.dt / FINGER_MASS
+        """m/s: the motors' target while the pads press a cube: the speed GRIP_FORCE gives a
+        finger in a solver step, so that a finger the cube stops is pressed with it."""
 
     @classmethod
     def add_to(cls, scene) -> list[int]:
@@ -113,8 +132,10 @@ class ParallelGripper(FloatingEffector):
         """Start an env step in every world: ``motions`` (B, 3) in [-1, 1] scale
         ``STEP_DISTANCE``; ``grips`` (B,) in [-1, 1] the finger commands (the opening's rate
         over ``FINGER_SPEED``: > 0 opens, < 0 closes)."""
-        self.move(motions, self.holding(slice(None)))
-        speeds = np.zeros(self.num_worlds) if grips is None else -0.5 * FINGER_SPEED * grips
+        held = self.holding(slice(None))
+        self.move(motions, held)
+        closing = np.zeros(self.num_worlds) if grips is None else -0.5 * FINGER_SPEED * grips
+        speeds = np.where((closing > 0.0) & (held >= 0), self.press_speed, closing)
         # the motors' targets written as World.set_joint_motor would, without its checks (the
         # commands are finite and clipped); a world whose targets change is woken, as that
         # call wakes it: sleeping cannot see a motor's target
@@ -128,10 +149,9 @@ class ParallelGripper(FloatingEffector):
     def holding(self, worlds) -> np.ndarray:
         """(k,) int64: the cube each of ``worlds`` (an index array, or slice(None)) holds now
         (an index into ``objects``; the first if several), -1 for none. A cube is held where
-        its centre lies between the pads (along y, and within their reach along x and z) and
-        its extent along y spans the gap between them to within HOLD_MARGIN on each side,
-        so that both pads touch it: a test of the poses, which says nothing about whether
-        friction will keep it there."""
+        both pads lie within HOLD_MARGIN of its faces along y (its bounding box's, whatever its
+        turn) and overlap it by more than HOLD_MARGIN along x and z: a test of the poses, which
+        says nothing about whether friction will keep it there."""
         s = self.world.state
         x = s.position[worlds]  # (k, n, 3)
         low = x[:, self.fingers[0], 1] + FINGER_HALF_EXTENTS[1]  # the inner faces (k,)
@@ -142,13 +162,12 @@ class ParallelGripper(FloatingEffector):
         extents = np.einsum("wkij,kj->wki", np.abs(s.rotation[worlds][:, self.objects]),
                             self.half_extents)
         y = centres[..., 1]
-        spans = ((y - extents[..., 1] <= low[:, None] + HOLD_MARGIN)
-                 & (y + extents[..., 1] >= high[:, None] - HOLD_MARGIN)
-                 & (y > low[:, None]) & (y < high[:, None]))
+        spans = ((np.abs(y - extents[..., 1] - low[:, None]) <= HOLD_MARGIN)
+                 & (np.abs(y + extents[..., 1] - high[:, None]) <= HOLD_MARGIN))
         reach = ((np.abs(centres[..., 0] - pad[:, None, 0])
-                  < FINGER_HALF_EXTENTS[0] + extents[..., 0])
+                  < FINGER_HALF_EXTENTS[0] + extents[..., 0] - HOLD_MARGIN)
                  & (np.abs(centres[..., 2] - pad[:, None, 2])
-                    < FINGER_HALF_EXTENTS[2] + extents[..., 2]))
+                    < FINGER_HALF_EXTENTS[2] + extents[..., 2] - HOLD_MARGIN))
         held = spans & reach
         return np.where(held.any(axis=1), np.argmax(held, axis=1), -1).astype(np.int64)
 

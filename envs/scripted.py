@@ -30,7 +30,7 @@ from .flip import (
     rotation_matrices,
     tilt,
 )
-from .gripper import FINGER_DROP, TOP_GRASP
+from .gripper import FINGER_DROP, MAX_OPENING, TOP_GRASP
 from .insert import CLEARANCE, HOLE_DEPTH, HOLE_HALF, PEG_HALF_EXTENTS, Insert
 from .observation import Layout
 from .slide import PUCK_FRICTION, PUCK_RADIUS
@@ -402,9 +402,11 @@ def _put(hand: np.ndarray, obj: np.ndarray, target: np.ndarray, carry: float) ->
 
 
 def _between(hand: np.ndarray, cube: np.ndarray) -> bool:
-    """Whether ``cube`` lies between the fingers where ``_take`` grasps it (the cube held)."""
-    return bool(np.linalg.norm(hand[:2] - cube[:2]) < 0.01
-                and abs(hand[2] - _grasp_height(cube, CUBE_HALF)) < 0.01)
+    """Whether ``cube`` lies between the fingers about where ``_take`` grasps it (the cube
+    held): along y anywhere between the open pads (a held cube slides along the fingers'
+    axis when the hand's velocity jumps)."""
+    return bool(abs(hand[0] - cube[0]) < 0.01 and abs(hand[1] - cube[1]) < 0.5 * MAX_OPENING
+                and abs(hand[2] - _grasp_height(cube, CUBE_HALF)) < 0.015)
 
 
 def _tower_fingers(layout: Layout, observation: dict) -> np.ndarray:
