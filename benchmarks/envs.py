@@ -13,9 +13,12 @@
    episode, after the first frame (which builds the renderer); and a picture of every task at
    the start and at the end of a scripted episode (seed 1), written to ``--frames`` (default
    docs/images).
+4. The two-finger gripper (``effector="gripper"``) on every task that grasps (``GRASPING``):
+   its scripted policies' success rates, and its env steps/s against the same task with the
+   pad, both timed in turn in each round of the same run (the ratio gripper / pad).
 
-    python benchmarks/envs.py                    # all three tables, about 3 minutes on 2 cores
-    python benchmarks/envs.py --only speed       # one table: success, speed or render
+    python benchmarks/envs.py                    # all four tables, about 5 minutes on 2 cores
+    python benchmarks/envs.py --only speed       # one table: success, speed, render or gripper
 """
 
 import argparse
@@ -45,11 +48,15 @@ COUNTERPARTS.update({"rigid_gym/Tower-v0": "PandaStack-v3",
 """Each task's panda-gym env for the speed ratio (Stack's and Throw's have none of the same
 kind: PandaPush-v3, one cube; Tower's the nearest there, a tower of cubes: PandaStack-v3;
 Insert's a peg carried and put down: PandaPickAndPlace-v3)."""
+GRASPING = ["rigid_gym/Stack-v0", "rigid_gym/Throw-v0", "rigid_gym/PickAndPlace-v0",
+            "rigid_gym/Tower-v0", "rigid_gym/Insert-v0"]
+"""The tasks that take ``effector="gripper"``."""
 
 
-def scripted_success(env_id: str, episodes: int) -> tuple[float, float, float]:
-    """(success rate, mean return, mean seconds per episode) of the scripted policy."""
-    env = gym.make(env_id)
+def scripted_success(env_id: str, episodes: int, **kwargs) -> tuple[float, float, float]:
+    """(success rate, mean return, mean seconds per episode) of the scripted policy of
+    ``gym.make(env_id, **kwargs)``."""
+    env = gym.make(env_id, **kwargs)
     policy = scripted_policy(env)
     successes, returns = [], []
     start = time.perf_counter()
@@ -66,23 +73,27 @@ def scripted_success(env_id: str, episodes: int) -> tuple[float, float, float]:
     return float(np.mean(successes)), float(np.mean(returns)), seconds
 
 
-def random_stepper(env_id: str, steps: int):
-    """A function () -> env steps/s of ``steps`` steps of a ``gym.make`` env with seeded
-    uniform random actions, resetting where an episode ends; warmed up by 100 steps."""
+def random_stepper(env_id: str, steps: int, scripted: bool = False, **kwargs):
+    """A function () -> env steps/s of ``steps`` steps of ``gym.make(env_id, **kwargs)`` with
+    seeded uniform random actions (or, ``scripted``, its scripted policy's, the policy's own
+    time included), resetting where an episode ends; warmed up by 100 steps."""
     if env_id == "PandaFlip-v3":
         without_missing_textures()
-    env = gym.make(env_id)
+    env = gym.make(env_id, **kwargs)
     rng = np.random.default_rng(0)
-    env.reset(seed=0)
+    observation = env.reset(seed=0)[0]
     env.action_space.seed(0)
+    policy = scripted_policy(env) if scripted else None
 
     def run(count) -> float:
+        nonlocal observation
         start = time.perf_counter()
         for _ in range(count):
-            action = rng.uniform(-1, 1, env.action_space.shape).astype(np.float32)
-            _, _, terminated, truncated, _ = env.step(action)
+            action = rng.uniform(-1, 1, env.action_space.shape).astype(np.float32) \
+                if policy is None else policy(observation)
+            observation, _, terminated, truncated, _ = env.step(action)
             if terminated or truncated:
-                env.reset()
+                observation = env.reset()[0]
         return count / (time.perf_counter() - start)
 
     run(100)  # warm-up: first allocations and caches
@@ -212,12 +223,42 @@ def print_speed_table(steps: int, repeats: int) -> None:
         print(f"| {panda} (panda-gym, PyBullet) | {statistics.median(rates[panda]):,.0f} | | |")
 
 
+def print_gripper_tables(episodes: int, steps: int, repeats: int) -> None:
+    """The gripper's scripted success rates on every task of GRASPING, and its env steps/s
+    (random actions, as ``print_speed_table``) against the pad's, both envs of a task timed
+    in turn in each of ``repeats`` rounds: the ratio is the median of the rounds'."""
+    print(f"\nThe two-finger gripper (effector=\"gripper\"): scripted policies, {episodes} "
+          "seeded episodes each\n")
+    print("| task | success rate | mean return | s per episode |")
+    print("|---|---|---|---|")
+    for env_id in GRASPING:
+        rate, mean_return, seconds = scripted_success(env_id, episodes, effector="gripper")
+        print(f"| {env_id} | {rate:.0%} | {mean_return:.1f} | {seconds:.3f} |", flush=True)
+    print(f"\nEnv steps/s, gripper against pad, gym.make, one env, resets included (median "
+          f"of {repeats} rounds of {steps} steps, every env timed in turn in each round), with "
+          "random actions and with the scripted policies (which grasp, carry and place)\n")
+    runs = {(env_id, effector, scripted): random_stepper(env_id, steps, scripted,
+                                                         effector=effector)
+            for env_id in GRASPING for scripted in (False, True)
+            for effector in ("pad", "gripper")}
+    rates = rates_in_rounds(runs, repeats)
+    print("| env | actions | pad steps/s | gripper steps/s | gripper / pad |")
+    print("|---|---|---|---|---|")
+    for env_id in GRASPING:
+        for scripted in (False, True):
+            pad, gripper = rates[env_id, "pad", scripted], rates[env_id, "gripper", scripted]
+            ratio = statistics.median(g / p for g, p in zip(gripper, pad))
+            print(f"| {env_id} | {'scripted' if scripted else 'random'} | "
+                  f"{statistics.median(pad):,.0f} | {statistics.median(gripper):,.0f} | "
+                  f"{ratio:.2f}x |", flush=True)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=100)
     parser.add_argument("--steps", type=int, default=1000)
     parser.add_argument("--repeats", type=int, default=5)
-    parser.add_argument("--only", choices=["success", "speed", "render"])
+    parser.add_argument("--only", choices=["success", "speed", "render", "gripper"])
     parser.add_argument("--frames", type=Path, default=Path("docs/images"),
                         help="folder for the task picture (tasks.png)")
     args = parser.parse_args()
@@ -240,6 +281,9 @@ def main():
         for env_id in TASKS:
             print(f"| {env_id} | {frame_milliseconds(env_id):.1f} |", flush=True)
         save_task_picture(args.frames / "tasks.png")
+
+    if args.only in (None, "gripper"):
+        print_gripper_tables(args.episodes, args.steps, args.repeats)
 
 
 if __name__ == "__main__":

@@ -36,7 +36,6 @@ from .task import (
     CUBE_HALF,
     CUBE_MASS,
     FRICTION,
-    SOLVER_SETTINGS,
     SOLVER_STEPS,
     STEP_TIME,
     Task,
@@ -132,7 +131,7 @@ class TaskBatch:
         # compiles the scene's geometry, which later resets reuse
         self.world = World(scene, dt=STEP_TIME / SOLVER_STEPS,
                            num_worlds=self.num_worlds if self.batched else None,
-                           config=SolverConfig.for_scene(scene, **SOLVER_SETTINGS))
+                           config=SolverConfig.for_scene(scene, **effector.solver_settings))
         self.gripper = effector(self.world, self.gripper_bodies, self.cubes, extents, STEP_TIME,
                                 [(i, scene.bodies[i].shape, scene.bodies[i].body_from_shape)
                                  for i in self.fixtures])
@@ -250,11 +249,11 @@ class TaskBatch:
         vectors = np.empty((len(worlds), len(self.gather)))
         finite = gather_observations(s.position, s.velocity, s.rotation, s.angular_velocity,
                                      worlds, self.gather, self.minus, vectors)
-        held = gripper.holding(worlds) if self.holding is not None else None
+        held, width = gripper.grasp(worlds) if self.holding is not None else (None, None)
         if held is not None:
             vectors[:, self.holding] = (held >= 0)[:, None]
-        if self.width is not None:
-            vectors[:, self.width] = gripper.widths(worlds)[:, None]
+        if width is not None:
+            vectors[:, self.width] = width[:, None]
         if not finite:  # a solver failure: say so here, not in a network
             self.refuse_non_finite(vectors, worlds)
         achieved = self.task.achieved_goal(vectors, s, worlds, self.cubes).astype(np.float32)

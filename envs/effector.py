@@ -30,7 +30,7 @@ from rigid_gym._core import Pads
 
 from rigid_gym.shapes import Box, Compound, Pose
 
-from .task import FRICTION, GRIPPER_START
+from .task import FRICTION, GRIPPER_START, SOLVER_SETTINGS
 
 STEP_DISTANCE = 0.05
 """m the gripper moves per env step along an axis at action 1 (panda-gym's and Fetch's scale)."""
@@ -66,7 +66,7 @@ class FloatingEffector:
 
     A subclass sets the class attributes ``body_half`` (m, the driven box's half extents),
     ``carried_half`` (m, each carried body's), ``workspace`` and ``start``, and implements
-    ``add_to``, ``command``, ``holding`` and ``forget``.
+    ``add_to``, ``command``, ``grasp`` and ``forget``.
     """
 
     body_half: tuple = PAD_HALF_EXTENTS
@@ -74,6 +74,9 @@ class FloatingEffector:
     workspace = Workspace()
     start: tuple = GRIPPER_START
     """m: the driven body's centre at reset."""
+    solver_settings: dict = SOLVER_SETTINGS
+    """SolverConfig fields where a task driven by this effector differs from the library's
+    defaults: the pad's tasks keep the v0 ids' dynamics (``SOLVER_SETTINGS``)."""
     top_grip: float = PAD_HALF_EXTENTS[2]
     """m from the top of an object taken by its top (Insert's peg) to the driven body's
     centre: the pad rests on it."""
@@ -151,14 +154,10 @@ class FloatingEffector:
         (B,) in [-1, 1] (None: tasks without a grip)."""
         raise NotImplementedError
 
-    def holding(self, worlds) -> np.ndarray:
-        """(k,) int64: the object each of ``worlds`` (an index array, or slice(None)) holds
-        now (an index into ``objects``), -1 for none."""
-        raise NotImplementedError
-
-    def widths(self, worlds) -> np.ndarray:
-        """(k,) m: the opening between the fingers in each of ``worlds`` (an index array, or
-        slice(None)), for an effector with fingers (observed as ``fingers.width``)."""
+    def grasp(self, worlds) -> tuple[np.ndarray, np.ndarray | None]:
+        """What ``worlds`` (an index array, or slice(None)) hold now: (k,) int64 the object
+        each holds (an index into ``objects``), -1 for none; and (k,) m the opening between
+        the fingers of an effector with fingers (observed as ``fingers.width``), else None."""
         raise NotImplementedError
 
     def forget(self, worlds) -> None:
@@ -198,8 +197,8 @@ class SuctionGripper(FloatingEffector):
         if grips is not None:
             self.grip(grips)
 
-    def holding(self, worlds) -> np.ndarray:
-        return self.held[worlds]
+    def grasp(self, worlds) -> tuple[np.ndarray, None]:
+        return self.held[worlds], None
 
     def grip(self, grips: np.ndarray) -> None:
         """After the pad's velocity is set: in the worlds where ``grips`` (B,) > 0 and

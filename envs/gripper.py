@@ -22,7 +22,7 @@ Panda's hand: one per world of a World, holding by friction alone.
   gains. The solver's velocity motor presses a finger that what it closes on stops every
   step with the force that would bring it to its target speed within a solver step (its mass
   times the speed over dt: 5 N at the closing speed), so where both pads are on a cube
-  (``holding``) and the command closes, the motors are driven at ``press_speed`` instead,
+  (``grasp``) and the command closes, the motors are driven at ``press_speed`` instead,
   the speed at which that force is ``GRIP_FORCE`` (as a real gripper's grasp closes at a
   speed until contact, then holds a force). So closing on a cube at any a < 0 presses it
   with 70 N from the env step after the pads meet it. At a = 0 the motors hold the opening
@@ -36,7 +36,7 @@ Panda's hand: one per world of a World, holding by friction alone.
   which moves a finger along its free axis regardless of its limits.
 * **No weld.** A cube is carried only by the friction between it and the pads: it stays
   while its weight and the hand's accelerations need less than 2 mu ``GRIP_FORCE`` (mu the
-  pair's Coulomb coefficient) and slips otherwise. ``holding`` reports the cube lying
+  pair's Coulomb coefficient) and slips otherwise. ``grasp`` reports the cube lying
   between the pads with both touching it (the observation's ``holding`` flag).
 
 Observations gain the opening (``fingers.width``, m) after the holding flag, as panda-gym's
@@ -96,6 +96,12 @@ class ParallelGripper(FloatingEffector):
     carried_half = FINGER_HALF_EXTENTS
     workspace = GRIPPER_WORKSPACE
     start = GRIPPER_START
+    solver_settings: dict = {}  # noqa: RUF012 (read, never mutated)
+    """The library's defaults: the v0 settings (``SOLVER_SETTINGS``) resolve a pair's touching
+    points by one impulse, which gives a cube squeezed between the pads a lift of about 1%
+    of the squeeze with no friction at all, and let a held cube creep down; contact patches
+    (the default) hold it still and let a frictionless one drop. The gripper has no published
+    results to keep."""
     top_grip = FINGER_DROP - TOP_GRASP
     """m from the top of an object the fingers take by its top to the hand's centre."""
 
@@ -104,6 +110,9 @@ class ParallelGripper(FloatingEffector):
         self.fingers = self.carried
         self.joints = np.array([next(j.index for j in world.scene.joints if j.body_a == finger)
                                 for finger in self.fingers.tolist()], dtype=np.int64)
+        self.all_worlds = np.arange(self.num_worlds, dtype=np.int64)
+        self.motor_speeds = world.core.joint_motor_speed
+        """(B, J) m/s: the core's motor targets, written in place (``command``)."""
         self.press_speed = GRIP_FORCE * world.dt / FINGER_MASS
         """m/s: the motors' target while the pads press a cube: the speed GRIP_FORCE gives a
         finger in a solver step, so that a finger the cube stops is pressed with it."""
@@ -132,62 +141,50 @@ class ParallelGripper(FloatingEffector):
         """Start an env step in every world: ``motions`` (B, 3) in [-1, 1] scale
         ``STEP_DISTANCE``; ``grips`` (B,) in [-1, 1] the finger commands (the opening's rate
         over ``FINGER_SPEED``: > 0 opens, < 0 closes)."""
-        held = self.holding(slice(None))
+        held = self.grasp(slice(None))[0]
         self.move(motions, held)
         closing = np.zeros(self.num_worlds) if grips is None else -0.5 * FINGER_SPEED * grips
         speeds = np.where((closing > 0.0) & (held >= 0), self.press_speed, closing)
         # the motors' targets written as World.set_joint_motor would, without its checks (the
         # commands are finite and clipped); a world whose targets change is woken, as that
         # call wakes it: sleeping cannot see a motor's target
-        targets = self.world.core.joint_motor_speed
+        targets = self.motor_speeds
         changed = np.flatnonzero(targets[:, self.joints[0]] != speeds)
-        for joint in self.joints.tolist():
-            targets[:, joint] = speeds
-        for world in changed.tolist():
-            self.world.core.forget(world, world + 1)
+        if changed.size:
+            targets[:, self.joints] = speeds[:, None]
+            for world in changed.tolist():
+                self.world.core.forget(world, world + 1)
 
-    def holding(self, worlds) -> np.ndarray:
-        """(k,) int64: the cube each of ``worlds`` (an index array, or slice(None)) holds now
-        (an index into ``objects``; the first if several), -1 for none. A cube is held where
-        both pads lie within HOLD_MARGIN of its faces along y (its bounding box's, whatever its
-        turn) and overlap it by more than HOLD_MARGIN along x and z: a test of the poses, which
-        says nothing about whether friction will keep it there."""
+    def grasp(self, worlds) -> tuple[np.ndarray, np.ndarray]:
+        """(held (k,) int64, width (k,) m) of ``worlds`` (an index array, or slice(None)):
+        the cube each holds now (an index into ``objects``; the first if several; -1 for
+        none) and the opening between the pads. A cube is held where both pads lie within
+        HOLD_MARGIN of its faces along y (its bounding box's, whatever its turn) and overlap
+        it by more than HOLD_MARGIN along x and z (``rigid_gym._core.Pads.grasps``): a test of
+        the poses, which says nothing about whether friction will keep it there."""
+        rows = self.all_worlds[worlds]
+        held = np.empty(len(rows), dtype=np.int64)
+        width = np.empty(len(rows))
         s = self.world.state
-        x = s.position[worlds]  # (k, n, 3)
-        low = x[:, self.fingers[0], 1] + FINGER_HALF_EXTENTS[1]  # the inner faces (k,)
-        high = x[:, self.fingers[1], 1] - FINGER_HALF_EXTENTS[1]
-        pad = x[:, self.fingers[0]]  # the pads' x and z (each finger's, the hand's)
-        centres = x[:, self.objects]  # (k, K, 3)
-        # each cube's half extent along every world axis, whatever its turn
-        extents = np.einsum("wkij,kj->wki", np.abs(s.rotation[worlds][:, self.objects]),
-                            self.half_extents)
-        y = centres[..., 1]
-        spans = ((np.abs(y - extents[..., 1] - low[:, None]) <= HOLD_MARGIN)
-                 & (np.abs(y + extents[..., 1] - high[:, None]) <= HOLD_MARGIN))
-        reach = ((np.abs(centres[..., 0] - pad[:, None, 0])
-                  < FINGER_HALF_EXTENTS[0] + extents[..., 0] - HOLD_MARGIN)
-                 & (np.abs(centres[..., 2] - pad[:, None, 2])
-                    < FINGER_HALF_EXTENTS[2] + extents[..., 2] - HOLD_MARGIN))
-        held = spans & reach
-        return np.where(held.any(axis=1), np.argmax(held, axis=1), -1).astype(np.int64)
+        self.pads.grasps(s.position, s.rotation, rows, HOLD_MARGIN, held, width)
+        return held, width
 
     @property
     def held(self) -> np.ndarray:
-        """(B,) int64: the cube each world's gripper holds now (``holding``), -1 for none."""
-        return self.holding(slice(None))
-
-    def widths(self, worlds) -> np.ndarray:
-        """(k,) m: the opening between the pads in each of ``worlds`` (an index array, or
-        slice(None))."""
-        y = self.world.state.position[worlds][:, self.fingers, 1]
-        return y[:, 1] - y[:, 0] - 2.0 * FINGER_HALF_EXTENTS[1]
+        """(B,) int64: the cube each world's gripper holds now (``grasp``), -1 for none."""
+        return self.grasp(slice(None))[0]
 
     def forget(self, worlds) -> None:
         """``worlds`` were reset (the fingers are open again, at the scene's start): their
         motors' targets go back to 0 (holding the opening)."""
-        targets = self.world.core.joint_motor_speed
         for joint in self.joints.tolist():
-            targets[worlds, joint] = 0.0
+            self.motor_speeds[worlds, joint] = 0.0
+
+    def __setstate__(self, state: dict) -> None:
+        """As ``FloatingEffector``'s, and the motor targets' view is taken from the World
+        copied with it (whose core is new)."""
+        super().__setstate__(state)
+        self.motor_speeds = self.world.core.joint_motor_speed
 
 
 EFFECTOR_CLASSES = {"pad": SuctionGripper, "gripper": ParallelGripper}

@@ -150,7 +150,47 @@ void bind_footprint(nb::module_& m) {
             "of a fixture's box part under its footprint (never lifting the pad); the pad's velocity is set to reach the "
             "target in step_time. motions (B, 3) in [-1, 1]; positions (B, n, 3) m, rotations "
             "(B, n, 3, 3) and velocities (B, n, 3) m/s (written: the pads') of every body; held "
-            "(B,) int64 the held box (an index into objects, -1: none).");
+            "(B,) int64 the held box (an index into objects, -1: none).")
+        .def(
+            "grasps",
+            [](Pads& p, nb::handle positions, nb::handle rotations, nb::handle worlds,
+               double margin, nb::handle held, nb::handle width) {
+                const int64_t b = p.targets.size(), k = p.objects.size();
+                if (p.carried.size() < 2) {
+                    throw nb::value_error("Pads.grasps: needs two carried bodies (the fingers)");
+                }
+                const auto x = array_arg<const double>(positions, "Pads.grasps: positions",
+                                                       {b, -1, 3});
+                const int64_t n = extent(x, 1);
+                const auto r = array_arg<const double>(rotations, "Pads.grasps: rotations",
+                                                       {b, n, 3, 3});
+                const auto wo = array_arg<const int64_t>(worlds, "Pads.grasps: worlds", {-1});
+                const int64_t count = extent(wo, 0);
+                const auto hd = array_arg<int64_t>(held, "Pads.grasps: held", {count});
+                const auto wd = array_arg<double>(width, "Pads.grasps: width", {count});
+                check_indices(rows<const int64_t>(wo), 0, b, "Pads.grasps: worlds", "worlds");
+                check_indices(Span<const int64_t>{p.objects.data(), k}, 0, n,
+                              "Pads.grasps: objects", "bodies");
+                check_indices(Span<const int64_t>{p.carried.data(), p.carried.size()}, 0, n,
+                              "Pads.grasps: carried", "bodies");
+                FootprintQuery q;
+                q.positions = rows<const Vec3>(x);
+                q.rotations = rows<const Mat3>(r);
+                q.num_bodies = n;
+                q.objects = {p.objects.data(), k};
+                q.halves = {p.halves.data(), k};
+                q.carried = {p.carried.data(), p.carried.size()};
+                q.carried_halves = {p.carried_halves.data(), p.carried_halves.size()};
+                nb::gil_scoped_release unlocked;
+                grasps(q, rows<const int64_t>(wo), margin, rows<int64_t>(hd), rows<double>(wd));
+            },
+            nb::arg("positions"), nb::arg("rotations"), nb::arg("worlds"), nb::arg("margin"),
+            nb::arg("held"), nb::arg("width"),
+            "A parallel gripper's grasp in worlds (k,) int64 (src/envs/footprint.h: grasps), "
+            "its fingers the first two carried bodies (towards -y, then +y): into held (k,) "
+            "int64 the box both fingers' inner faces lie within margin m of along y (an index "
+            "into objects, -1: none), into width (k,) m the opening between them. positions "
+            "(B, n, 3) m and rotations (B, n, 3, 3) of every body.");
 }
 
 }  // namespace rg

@@ -171,6 +171,37 @@ void lowest_centres(const FootprintQuery& q, Span<double> out) {
     }
 }
 
+void grasps(const FootprintQuery& q, Span<const int64_t> worlds, double margin,
+            Span<int64_t> held, Span<double> width) {
+    const Vec3& low_half = q.carried_halves[0];
+    const Vec3& high_half = q.carried_halves[1];
+    for (int64_t i = 0; i < worlds.size; ++i) {
+        const int64_t first = worlds[i] * q.num_bodies;
+        const Vec3& pad = q.positions[first + q.carried[0]];  // the pads' x and z
+        const double low = pad.y + low_half.y;  // the inner faces
+        const double high = q.positions[first + q.carried[1]].y - high_half.y;
+        width[i] = high - low;
+        held[i] = -1;
+        for (int64_t k = 0; k < q.objects.size; ++k) {
+            const Vec3& c = q.positions[first + q.objects[k]];
+            const Mat3& r = q.rotations[first + q.objects[k]];
+            const Vec3& h = q.halves[k];
+            double extent[3];  // the bounding box's half extents, whatever the box's turn
+            for (int axis = 0; axis < 3; ++axis) {
+                extent[axis] = std::abs(r(axis, 0)) * h.x + std::abs(r(axis, 1)) * h.y +
+                               std::abs(r(axis, 2)) * h.z;
+            }
+            if (std::abs(c.y - extent[1] - low) <= margin &&
+                std::abs(c.y + extent[1] - high) <= margin &&
+                std::abs(c.x - pad.x) < low_half.x + extent[0] - margin &&
+                std::abs(c.z - pad.z) < low_half.z + extent[2] - margin) {
+                held[i] = k;
+                break;
+            }
+        }
+    }
+}
+
 void command_pads(FootprintQuery query, const PadCommand& c) {
     const int64_t worlds = c.motions.size;
     for (int64_t w = 0; w < worlds; ++w) {

@@ -54,6 +54,16 @@ struct FootprintQuery {
 // ignored.
 void lowest_centres(const FootprintQuery& query, Span<double> out);
 
+// A parallel gripper's grasp in the worlds `worlds` (indices into the query's batch), from
+// the query's positions, rotations, boxes (objects, halves) and carried bodies, whose first
+// two are the fingers (towards -y, then towards +y: they slide along y and never turn): into
+// held (k,) the box each world's fingers hold (an index into objects, the first if several,
+// -1: none) and into width (k,) m the opening between the fingers' inner faces. A box is held
+// where both inner faces lie within `margin` (m) of its bounding box's faces along y and
+// overlap it by more than `margin` along x and along z: both pads on it.
+void grasps(const FootprintQuery& query, Span<const int64_t> worlds, double margin,
+            Span<int64_t> held, Span<double> width);
+
 // One env step's command of every world's pad (the query's targets are ignored: the targets
 // are made here).
 struct PadCommand {
