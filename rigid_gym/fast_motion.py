@@ -11,9 +11,13 @@ cube resting on the ground has none to release). All of it in the lightest body 
 sqrt(2 E / m); all of it spinning the body with the least moment turns its points at
 sqrt(2 E / I) times its reach. A kinematic body keeps the speed it is given and can throw a
 body at up to twice its own speed (e = 1), adding its points' speed to any relative motion.
+A joint's motor is a source of energy too: it drives its body towards its target speed
+(a revolute one's points at that rate times the body's reach), which counts as a kinematic
+body's speed does.
 
 Not counted, so not foreseen: speed given later (``World.set_velocity``, impulses, forces,
-kinematic bodies moved between steps, as the envs' gripper is). A World that will be given
+kinematic bodies moved between steps, as the envs' gripper is, motors set by
+``World.set_joint_motor``). A World that will be given
 such speeds can pass ``continuous=True`` explicitly.
 """
 
@@ -25,6 +29,7 @@ import numpy as np
 
 from rigid_gym import quaternion as quat
 from rigid_gym._core import DYNAMIC, KINEMATIC
+from rigid_gym.joints import REVOLUTE
 from rigid_gym.shapes import Compound, Plane, Shape
 
 if TYPE_CHECKING:
@@ -89,6 +94,9 @@ def reachable_speed(scene: Scene) -> float:
                                        - half_thickness(b.shape)) for b in dynamic)
     thrown = max((float(np.linalg.norm(b.velocity)) + float(np.linalg.norm(b.angular_velocity))
                   * reach(b) for b in bodies if b.motion == KINEMATIC), default=0.0)
+    driven = max((abs(j.motor_speed) * (reach(bodies[j.body_a]) if j.kind == REVOLUTE else 1.0)
+                  for j in scene.joints if j.max_motor > 0.0), default=0.0)
+    thrown = max(thrown, driven)
     linear = max(np.sqrt(2.0 * energy / b.mass) for b in dynamic)
     spin = max(np.sqrt(2.0 * energy / min(b.principal_moments)) * reach(b) for b in dynamic)
     return float(linear + spin + 3.0 * thrown)

@@ -401,6 +401,46 @@ def slider_errors(world: rg.World) -> tuple[float, float]:
     return (abs(a / (G * np.sin(theta)) - 1.0), float(np.linalg.norm(off)))
 
 
+GRASP_ROWS = (  # (cube mass kg, grip N, friction, the hand's upward acceleration m/s^2)
+    (0.1, 0.5, 0.5, 0.0), (0.1, 0.9, 0.5, 0.0), (0.1, 1.1, 0.5, 0.0), (0.1, 1.5, 0.5, 5.0),
+    (0.1, 1.5, 0.5, 10.0), (0.2, 0.95, 1.0, 0.0), (0.2, 1.0, 1.0, 0.0), (0.5, 10.0, 0.5, 8.0),
+    (0.5, 10.0, 0.5, 12.0), (2.0, 70.0, 0.3, 10.0), (2.0, 70.0, 0.3, 15.0))
+GRASP_SECONDS = 0.1  # s measured, after the first step (the fingers' first squeeze)
+
+
+def grasp_held(row) -> bool:
+    """Whether friction holds row (m, F, mu, a)'s cube: m (g + a) < 2 mu F."""
+    mass, grip, friction, lift = row
+    return mass * (G + lift) < 2.0 * friction * grip
+
+
+def grasp_errors(world: rg.World) -> tuple[float, float]:
+    """The grippers of ``scenes.grasps`` (GRASP_ROWS), each hand moved up at its row's
+    acceleration a from rest: the largest slip (m) of a held cube against its hand over
+    GRASP_SECONDS (exact 0), and the largest |a_cube / (2 mu F / m - g) - 1| of the sliding
+    ones (their cubes' acceleration over the same time: friction mu F on each face)."""
+    hands = 4 * np.arange(len(GRASP_ROWS))
+    lifts = np.array([row[3] for row in GRASP_ROWS])
+
+    def step() -> None:
+        for hand, lift in zip(hands, lifts):
+            world.set_velocity(int(hand), (0.0, 0.0, lift * world.time))
+        world.step()
+
+    step()
+    steps = max(1, round(GRASP_SECONDS / world.dt))
+    offset = world.position[hands + 1, 2] - world.position[hands, 2]
+    start = world.velocity[hands + 1, 2].copy()
+    for _ in range(steps):
+        step()
+    slip = world.position[hands + 1, 2] - world.position[hands, 2] - offset
+    accel = (world.velocity[hands + 1, 2] - start) / (steps * world.dt)
+    held = np.array([grasp_held(row) for row in GRASP_ROWS])
+    exact = np.array([2.0 * f * grip / m - G for m, grip, f, _ in GRASP_ROWS])
+    return (float(np.max(np.abs(slip[held]))),
+            float(np.max(np.abs(accel[~held] / exact[~held] - 1.0))))
+
+
 BLOCK_FORCE, BLOCK_SECONDS = 10.0, 0.2  # N on the lower block (sliding needs > 2 mu m g = 5.9 N)
 
 
@@ -594,6 +634,25 @@ CASES = (
     Case("slider", f"cube on a frictionless prismatic joint along a {SLIDER_DEG:g} deg slope",
          "a = g sin theta", ("acceleration, relative error", "distance from the line, m"),
          lambda: scenes.slider(SLIDER_DEG), slider_errors, {"default": {}}),
+    Case("grasp", f"{len(GRASP_ROWS)} cubes (m = 0.1 to 2 kg) squeezed by two-finger "
+         f"grippers (F = 0.5 to 70 N, mu = 0.3 to 1), hands accelerating up at a = 0 to 15 "
+         f"m/s^2, {GRASP_SECONDS:g} s",
+         "held (slip 0) while m (g + a) < 2 mu F, else slides at 2 mu F / m - g",
+         ("held cubes' slip, m", "sliding cubes' acceleration, relative error"),
+         lambda: scenes.grasps([row[:3] for row in GRASP_ROWS]), grasp_errors,
+         PASS_SETTINGS,
+         "the fingers are on prismatic joints to kinematic hands: a contact moves a finger only "
+         "along its axis (src/solver/mobility.h), so friction on its face is the hand's, and "
+         "each motor squeezes with F dt a step. The rows straddle the threshold by 2 to 20 %. "
+         "At dt = 1/240 a held cube slips less than 1e-9 m and a sliding one's acceleration "
+         "is within 1e-5: the step's friction is mu times its normal impulse (Coulomb's limit "
+         "on the step's total), and that is F dt less m_f times the rate at which a finger "
+         "closes a gap of up to 1e-6 m (speculative contact, patch.h) left by the carried "
+         "depths of a sliding face. A 70 N finger (20 g) would move 6 cm in a step at 1/240 "
+         "if nothing stopped it, through the 5 cm cube: its contact is found where it meets "
+         "the cube (continuous collision, which for_scene switches on for the motors' "
+         "speeds); with the narrow phase in every pass, and at dt >= 1/60, where it would "
+         "move 1 m, the 70 N rows lose their grip."),
     Case("stack_drift", f"{STACK_COUNT}-cube stack resting for {STACK_SECONDS:g} s", "at rest: drift 0",
          ("largest displacement, m",), lambda: scenes.cube_stack(STACK_COUNT), stack_drift,
          {**PASS_SETTINGS, "no shock propagation": {"shock_sweeps": 0}}),

@@ -269,6 +269,74 @@ def slider(theta_deg: float) -> rg.Scene:
     return scene
 
 
+GRASP_CUBE_HALF = 0.025  # m: a 5 cm cube
+GRASP_FINGER_HALF = (0.01, 0.01, 0.03)  # m: 2 cm wide, 6 cm tall fingers
+GRASP_FINGER_MASS = 0.02  # kg
+GRASP_OPENING = 0.08  # m: the fingers' widest opening, as a Panda hand's
+GRASP_SLOWEST_DT = 0.05  # s: up to this dt each motor pushes with its full force every step
+GRASP_SPACING = 0.5  # m between the grippers along y
+
+
+def gripper(scene: rg.Scene, centre, cube_mass: float, grip: float, friction: float,
+            ground: bool = False) -> tuple[int, int, tuple[int, int], tuple[int, int]]:
+    """Add a floating parallel-jaw gripper to ``scene`` holding a GRASP_CUBE_HALF cube of
+    ``cube_mass`` kg at ``centre`` (3,) m: a kinematic hand above it and two
+    GRASP_FINGER_MASS fingers touching its faces across x, each on a prismatic joint to the
+    hand along x outwards (coordinate 0 touching the cube, limits open to GRASP_OPENING in
+    all, closed to 0) whose motor closes with at most ``grip`` N at a speed no step up to
+    GRASP_SLOWEST_DT reaches, so that it squeezes with ``grip`` every step. Every body has
+    ``friction``. ground: the cube rests on the ground (added) instead of hanging in the air.
+    Returns (hand, cube, (finger -x, finger +x), (their joints))."""
+    x, y, z = centre
+    c, (fx, _, fz) = GRASP_CUBE_HALF, GRASP_FINGER_HALF
+    if ground:
+        scene.add_ground(friction=friction)
+    hand = scene.add_body(rg.Box((c + 2 * fx, 0.02, 0.01)), position=(x, y, z + fz + 0.03),
+                          kinematic=True, friction=friction)
+    cube = scene.add_body(rg.Box((c, c, c)), mass=cube_mass, position=(x, y, z),
+                          friction=friction)
+    speed = grip * GRASP_SLOWEST_DT / GRASP_FINGER_MASS
+    fingers, joints = [], []
+    for side in (-1.0, 1.0):
+        at = (x + side * (c + fx), y, z + fz - c + 0.005)  # 5 mm above the cube's bottom
+        finger = scene.add_body(rg.Box(GRASP_FINGER_HALF), mass=GRASP_FINGER_MASS, position=at,
+                                friction=friction)
+        joints.append(scene.add_prismatic_joint(
+            finger, hand, at, (side, 0.0, 0.0), limits=(-c, 0.5 * GRASP_OPENING - c),
+            motor_speed=-speed, max_motor_force=grip))
+        fingers.append(finger)
+    return hand, cube, (fingers[0], fingers[1]), (joints[0], joints[1])
+
+
+def grasps(rows) -> rg.Scene:
+    """One gripper (``gripper``) per row (cube mass kg, grip N, friction) of ``rows``, in the
+    air GRASP_SPACING apart along y, each cube hanging between its fingers. Row k's bodies are
+    4 k (hand), 4 k + 1 (cube), 4 k + 2 and 4 k + 3 (fingers); its joints 2 k and 2 k + 1."""
+    scene = rg.Scene()
+    for k, (mass, grip, friction) in enumerate(rows):
+        gripper(scene, (0.0, GRASP_SPACING * k, 1.0), mass, grip, friction)
+    return scene
+
+
+HINGED_ROD_HALF = (0.25, 0.01, 0.01)  # m: a 0.5 m rod along x
+
+
+def hinged_rod(restitution: float, omega: float) -> rg.Scene:
+    """No gravity. A 1 kg rod (half extents HINGED_ROD_HALF) hinged at its end (the origin)
+    about y to the world, horizontal along +x, turning at ``omega`` rad/s about y (its far end
+    moving down), 1 cm above a static block under its far 10 cm; both with ``restitution``
+    and friction 0.5. Body 0 the rod, 1 the block; joint 0."""
+    hx, _, hz = HINGED_ROD_HALF
+    scene = rg.Scene(gravity=(0.0, 0.0, 0.0))
+    rod = scene.add_body(rg.Box(HINGED_ROD_HALF), mass=1.0, position=(hx, 0.0, 0.0),
+                         velocity=(0.0, 0.0, -omega * hx), angular_velocity=(0.0, omega, 0.0),
+                         restitution=restitution)
+    scene.add_revolute_joint(rod, None, (0.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+    scene.add_body(rg.Box((0.05, 0.2, 0.05)), position=(2 * hx - 0.05, 0.0, -hz - 0.06),
+                   static=True, restitution=restitution)
+    return scene
+
+
 CHAIN_LINKS, CHAIN_LINK = 10, 0.1  # m: each link's length, joint to joint
 
 

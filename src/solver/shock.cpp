@@ -14,7 +14,6 @@
 // between bodies keeps momentum.
 #include <algorithm>
 
-
 #include "solver/contacts.h"
 #include "solver/levels.h"
 #include "solver/mobility.h"

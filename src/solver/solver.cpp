@@ -473,7 +473,8 @@ int resolve_patches(StepContext& w, int a, Movable movable, const ContactSet& se
             continue;
         }
         Mat3 k = {};
-        const bool jointed = (movable.a && model.articulated[a]) || (movable.b && model.articulated[b]);
+        const bool jointed =
+            (movable.a && model.articulated[a]) || (movable.b && model.articulated[b]);
         const auto add_body = [&](int i, Vec3 r) {
             if (model.articulated[i]) {
                 add_articulated_point_matrix(s, model, i, r, k);  // mobility.h
