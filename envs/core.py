@@ -236,8 +236,8 @@ class TaskBatch:
     def observe(self, copies) -> Outcome:
         """The Outcome of ``copies`` (ALL, or an int array) in their current state.
 
-        observation: the fields of the task's ``observation_layout`` (the pad's state, whether
-        it holds a cube, each cube's state); achieved_goal: the cubes' positions (their
+        observation: the fields of the task's ``observation_layout`` (the pad's or the hand's
+        state, whether it holds a cube, the fingers' opening, each cube's state); achieved_goal: the cubes' positions (their
         ``cube<k>.position`` fields). Computed in float64, checked finite, noise added, then
         cast to float32; the goal test and the reward read the float32 goals, exactly as
         ``compute_reward`` sees them. With pixels (``obs_mode``), ``pixels`` holds the

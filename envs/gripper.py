@@ -27,13 +27,11 @@ Panda's hand: one per world of a World, holding by friction alone.
   speed until contact, then holds a force). So closing on a cube at any a < 0 presses it
   with 70 N from the env step after the pads meet it. At a = 0 the motors hold the opening
   but no longer press: a held cube needs a < 0 for as long as it is to be held.
-* **The fingers are driven apart from each other.** Two force-limited motors pressing a
-  cube from both sides leave the three free to slide together along y but for the motors'
-  difference: when the hand's velocity along y jumps, the cube and the fingers lag and
-  are brought back by the motor that is not saturated (about a centimetre at a jump of
-  1.25 m/s). Panda's fingers share one spindle drive, which holds them together; with two
-  joints to the hand, limits that held one finger still would meet the contact response,
-  which moves a finger along its free axis regardless of its limits.
+* **Each finger has its own motor.** Two force-limited motors pressing a cube from both
+  sides leave the three free to slide together along y but for the motors' difference:
+  when the hand's velocity along y jumps, the cube and the fingers lag and are brought back
+  by the motor that is not saturated (about a centimetre at a jump of 1.25 m/s; see
+  ``FINGER_MASS``). Panda's fingers share one spindle drive, which holds them together.
 * **No weld.** A cube is carried only by the friction between it and the pads: it stays
   while its weight and the hand's accelerations need less than 2 mu ``GRIP_FORCE`` (mu the
   pair's Coulomb coefficient) and slips otherwise. ``grasp`` reports the cube lying
@@ -60,10 +58,12 @@ FINGER_HALF_EXTENTS = (0.01, 0.006, 0.025)
 the hand's bottom."""
 FINGER_MASS = 0.08
 """kg: each finger's mass. Panda's finger is about 15 g; the finger here carries its share
-of the drive as well, because a stopped finger's motor presses with FINGER_MASS times its
-target speed per solver step, and the contact stage holds a pressing finger steadily only
-while that speed moves it less than about 2 mm per solver step: at 80 g, GRIP_FORCE needs
-3.5 m/s (1.4 mm per step); at 15 g it would need 18.7 m/s, and the squeeze would chatter."""
+of the drive as well, because the fingers' common motion along y (both sliding the same
+way, the cube between them) is held only by the difference between the two motors' pushes,
+and a velocity motor pushes by at most its finger's mass times the speed it is short of,
+per solver step: at 80 g a jump of the hand's velocity of 1.25 m/s along y lets a held cube
+lag about 1 cm along the fingers (the scripted policies carry it); at 15 g the hand moves
+off and leaves the cube behind."""
 FINGER_FRICTION = FRICTION
 """Coulomb coefficient of the fingers' pads (with a cube of 0.5 the pair's is 0.5)."""
 MAX_OPENING = 0.08

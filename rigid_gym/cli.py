@@ -120,18 +120,19 @@ def demo(steps: int, dt: float, order: int) -> int:
 
 
 def record(env_id: str, policy: str, algo: str | None, episodes: int, seed: int, out: str,
-           run: str | None, contacts: bool) -> int:
-    """Record ``episodes`` episodes of ``env_id`` driven by ``policy``; print each file."""
+           run: str | None, contacts: bool, effector: str = "pad") -> int:
+    """Record ``episodes`` episodes of ``env_id`` driven by ``policy`` through ``effector``
+    (the pad, or the two-finger gripper); print each file."""
     import gymnasium as gym
 
     from rigid_gym.agents.policies import make_policy
     from rigid_gym.recording import RecordRerun
 
-    kwargs = {}
+    kwargs = {"effector": effector}
     if policy.endswith(".zip"):  # a pixel model's env shows it what it was trained on
         from rigid_gym.agents.evaluate import observation_kwargs, run_metadata
 
-        kwargs = observation_kwargs(run_metadata(policy))
+        kwargs |= observation_kwargs(run_metadata(policy))
     env = RecordRerun(gym.make(env_id, **kwargs), out, episode_trigger=lambda k: True,
                       run=run or f"{policy_name(policy)}-seed{seed}", contacts=contacts)
     act = make_policy(env, policy, algo, seed)
@@ -393,6 +394,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="run name in the file names (default <policy>-seed<seed>)")
     p.add_argument("--contacts", action="store_true",
                    help="also record contact points and force arrows")
+    p.add_argument("--effector", choices=("pad", "gripper"), default="pad",
+                   help="pad (default) or gripper: the two-finger gripper, on the tasks that "
+                        "pick objects up")
     p = commands.add_parser("replay", help="open .rrd recordings in the rerun viewer")
     p.add_argument("files", nargs="+", metavar="FILE", help=".rrd file(s)")
     p.add_argument("--web", action="store_true",
@@ -532,7 +536,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "dataset":
             return dataset(args)
         return record(args.env_id, args.policy, args.algo, args.episodes, args.seed, args.out,
-                      args.run, args.contacts)
+                      args.run, args.contacts, args.effector)
     except ValueError as exc:  # an argument: the usage says what is allowed
         parser.error(str(exc))
     except BadFile as exc:  # the arguments were fine, a file is not: no usage

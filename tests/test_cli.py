@@ -66,6 +66,18 @@ def test_record_the_scripted_policy(tmp_path, capsys):
     assert "success True" in capsys.readouterr().out
 
 
+def test_record_the_gripper(tmp_path, capsys):
+    """--effector gripper records the two-finger gripper (its hand and fingers in the file)."""
+    from rerun.chunk import RrdReader
+
+    assert main(["record", "rigid_gym/PickAndPlace-v0", "--effector", "gripper", "--out",
+                 str(tmp_path)]) == 0
+    assert "success True" in capsys.readouterr().out
+    path = tmp_path / "rigid_gym-PickAndPlace-v0" / "scripted-seed0-episode-0.rrd"
+    entities = {chunk.entity_path for chunk in RrdReader(path).stream()}
+    assert {"/world/bodies/hand", "/world/bodies/finger0", "/world/bodies/finger1"} <= entities
+
+
 def sb3_model(algorithm: str):
     """An untrained model for Throw: PPO, or SAC with HER (whose loading needs the env)."""
     import gymnasium as gym
@@ -96,6 +108,10 @@ def test_record_a_stable_baselines3_model_reads_its_algorithm_from_the_zip(algor
      "expected random, scripted or a model .zip, got 'greedy'"),
     (["record", "rigid_gym/Push-v0", "--episodes", "0"], "must be in [1, 10000], got 0"),
     (["record", "rigid_gym/Push-v0", "--run", "a/b"], "RecordRerun.run: must be a non-empty"),
+    (["record", "rigid_gym/Push-v0", "--effector", "gripper"],
+     "PushEnv: effector='gripper' is for the tasks that pick objects up"),
+    (["record", "rigid_gym/Stack-v0", "--effector", "suction"],
+     "argument --effector: invalid choice: 'suction'"),
 ])
 def test_bad_record_arguments_fail_clearly(args, message, usage_error):
     assert message in usage_error(args)

@@ -191,6 +191,37 @@ def test_the_file_holds_the_episode_exactly(env_id, tmp_path):
     assert len(rows(arrows, 3)) > 0 or not task.num_cubes  # Reach's pad touches nothing
 
 
+def test_the_gripper_s_hand_and_fingers_are_in_the_file(tmp_path):
+    """effector="gripper": the hand and both fingers are bodies of the file, boxes of their
+    sizes (the fingers in DRIVEN_COLOR), moving as in the env (float32) through a scripted
+    episode that closes the fingers on the cube; the action series' last entry is named
+    "fingers"."""
+    from rigid_gym.envs.gripper import FINGER_HALF_EXTENTS, HAND_HALF_EXTENTS
+    from rigid_gym.render import DRIVEN_COLOR
+
+    env = RecordRerun(gym.make("rigid_gym/PickAndPlace-v0", effector="gripper",
+                               max_episode_steps=12), tmp_path,
+                      episode_trigger=lambda k: True, run="test")
+    positions, *_ = run_episode(env, seed=0)
+    path = env.paths[0]
+    scene = env.unwrapped.scene
+    widths = positions[:, scene.index("finger1"), 1] - positions[:, scene.index("finger0"), 1]
+    assert widths.max() - widths.min() > 0.03  # the fingers closed on the cube
+    for name, half in (("hand", HAND_HALF_EXTENTS), ("finger0", FINGER_HALF_EXTENTS),
+                       ("finger1", FINGER_HALF_EXTENTS)):
+        entity = f"/world/bodies/{name}"
+        step, translation = temporal(path, entity, "Transform3D:translation")
+        assert step.tolist() == list(range(len(positions)))
+        np.testing.assert_array_equal(rows(translation, 3),
+                                      positions[:, scene.index(name)].astype(np.float32))
+        np.testing.assert_allclose(static_values(path, entity, "Boxes3D:half_sizes"), [half])
+    (color,) = static_values(path, "/world/bodies/finger0", "Boxes3D:colors")
+    assert color == int.from_bytes(bytes([*np.round(255 * np.array(DRIVEN_COLOR)).astype(int),
+                                          255]), "big")
+    labels = static_values(path, "/action", "SeriesLines:names")
+    assert labels == ["x", "y", "z", "fingers"]
+
+
 @pytest.mark.parametrize("env_id", TASK_IDS)
 def test_geometry_goals_and_layout_are_in_every_file_once(env_id, tmp_path):
     """The second file reuses what the first built (geometry, layout): both hold it all."""
