@@ -128,7 +128,7 @@ def record(env_id: str, policy: str, algo: str | None, episodes: int, seed: int,
     from rigid_gym.agents.policies import make_policy
     from rigid_gym.recording import RecordRerun
 
-    kwargs = {"effector": effector}
+    kwargs: dict = {"effector": effector}
     if policy.endswith(".zip"):  # a pixel model's env shows it what it was trained on
         from rigid_gym.agents.evaluate import observation_kwargs, run_metadata
 

@@ -197,6 +197,7 @@ def test_the_gripper_s_hand_and_fingers_are_in_the_file(tmp_path):
     episode that closes the fingers on the cube; the action series' last entry is named
     "fingers"."""
     from rigid_gym.envs.gripper import FINGER_HALF_EXTENTS, HAND_HALF_EXTENTS
+
     from rigid_gym.render import DRIVEN_COLOR
 
     env = RecordRerun(gym.make("rigid_gym/PickAndPlace-v0", effector="gripper",
