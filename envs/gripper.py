@@ -180,6 +180,13 @@ class ParallelGripper(FloatingEffector):
         for joint in self.joints.tolist():
             self.motor_speeds[worlds, joint] = 0.0
 
+    def __getstate__(self) -> dict:
+        """As ``FloatingEffector``'s, without the view of the motor targets (the World's core
+        holds them)."""
+        state = super().__getstate__()
+        del state["motor_speeds"]
+        return state
+
     def __setstate__(self, state: dict) -> None:
         """As ``FloatingEffector``'s, and the motor targets' view is taken from the World
         copied with it (whose core is new)."""

@@ -142,10 +142,12 @@ def test_wrapped_env_deepcopy_copies_the_time_limit():
     assert ends == [10, 10]
 
 
-def test_vector_env_restore_deepcopy_and_pickle_step_on_bit_for_bit():
-    """Every copy, with autoresets inside the trace (short episodes) and their step counts."""
+@pytest.mark.parametrize("effector", ["pad", "gripper"])
+def test_vector_env_restore_deepcopy_and_pickle_step_on_bit_for_bit(effector):
+    """Every copy, with autoresets inside the trace (short episodes) and their step counts;
+    with the two-finger gripper too (its motors' targets live in the World's core)."""
     envs = gym.make_vec("rigid_gym/Stack-v0", num_envs=3, max_episode_steps=25,
-                        observation_noise=0.01)
+                        observation_noise=0.01, effector=effector)
     envs.reset(seed=1)
     actions = np.random.default_rng(1).uniform(-1, 1, (90, *envs.action_space.shape))
     env_trace(envs, actions[:10])
