@@ -122,7 +122,7 @@ print(run_gripper_batch(gripper_batch()))
 """
 
 
-def test_gripper_worlds_repeat_across_threads_and_processes():
+def test_gripper_worlds_repeat_across_threads_and_processes(two_threads):
     hashes = set()
     for shared in (True, False):
         world = gripper_batch()
