@@ -237,10 +237,10 @@ class TaskBatch:
         """The Outcome of ``copies`` (ALL, or an int array) in their current state.
 
         observation: the fields of the task's ``observation_layout`` (the pad's or the hand's
-        state, whether it holds a cube, the fingers' opening, each cube's state); achieved_goal: the cubes' positions (their
-        ``cube<k>.position`` fields). Computed in float64, checked finite, noise added, then
-        cast to float32; the goal test and the reward read the float32 goals, exactly as
-        ``compute_reward`` sees them. With pixels (``obs_mode``), ``pixels`` holds the
+        state, whether it holds a cube, the fingers' opening, each cube's state);
+        achieved_goal: the cubes' positions (their ``cube<k>.position`` fields). Computed in
+        float64, checked finite, noise added, then cast to float32; the goal test and the
+        reward read the float32 goals, exactly as ``compute_reward`` sees them. With pixels (``obs_mode``), ``pixels`` holds the
         copies' frames (k, height, width, 3) uint8, and "pixels" mode leaves out
         ``observation``."""
         world, gripper = self.built()

@@ -93,11 +93,6 @@ class FloatingEffector:
         self.fixed = fixture_boxes(fixtures)
         self.pads = self.made_pads()
 
-    @property
-    def bodies(self) -> list[int]:
-        """Every body of the effector: the driven one, then the carried ones."""
-        return [self.body, *self.carried.tolist()]
-
     def made_pads(self) -> Pads:
         """The core's command object for these effectors: what every command passes to the
         core, fixed once (the driven box, the bodies carried with it, the boxes, the fixtures'
