@@ -21,6 +21,7 @@ from rigid_gym.envs.gripper import (
 )
 from rigid_gym.envs.scripted import scripted_policy
 from rigid_gym.envs.task import CUBE_HALF, STEP_TIME
+from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 GRASPING = ["Stack", "Throw", "PickAndPlace", "Tower", "Insert"]
 OBS_MODES = ["state", "pixels", "state+pixels"]
@@ -34,12 +35,13 @@ def make(task, **kwargs):
 @pytest.mark.parametrize("task", GRASPING)
 @pytest.mark.parametrize("mode", OBS_MODES)
 def test_checkers_pass_in_every_mode(task, mode):
-    """Gymnasium's check_env (determinism of reset(seed) and step included) passes with the
-    gripper; the action has the finger command, the observation the opening."""
+    """Gymnasium's and SB3's check_env (determinism of reset(seed) and step included) pass
+    with the gripper; the action has the finger command, the observation the opening."""
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*(infinity|needs a display).*")
         env = make(task, obs_mode=mode, width=32, height=32)
         check_env(env)
+        sb3_check_env(make(task, obs_mode=mode, width=32, height=32))
     assert env.action_space.shape == (4,)
     obs, _ = env.reset(seed=0)
     if mode != "pixels":
