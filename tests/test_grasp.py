@@ -140,3 +140,36 @@ def test_gripper_worlds_repeat_across_threads_and_processes(two_threads):
     rose = world.position[:, [HAND, CUBE], 2] - start
     np.testing.assert_allclose(rose[:, 0], 0.05 * np.arange(6) * 0.4, atol=1e-12)
     np.testing.assert_allclose(rose[:, 1], rose[:, 0], atol=1e-9)  # every cube with its hand
+
+
+def test_a_welded_box_takes_a_ball_as_a_static_one_does():
+    """A box on a fixed joint to the world is held in all six directions: a contact moves it
+    not at all (G = 0 exactly, mobility.cpp), and a ball (e = 0.5) dropped on it bounces as off
+    the same box made static: the same heights to 1e-9 m through its bounces (0.75 s). Once
+    the bounces are shorter than a step the two part by up to 0.3 mm: the welded box is a
+    dynamic body, which the collision stage predicts g dt^2 lower, as it does every dynamic
+    body (solver.h); both end at rest on the box."""
+    def bounce(welded: bool) -> tuple[np.ndarray, np.ndarray]:
+        scene = rg.Scene()
+        box = scene.add_body(rg.Box((0.2, 0.2, 0.05)), mass=5.0 if welded else None,
+                             static=not welded, restitution=0.5)
+        if welded:
+            scene.add_fixed_joint(box, None)
+        ball = scene.add_body(rg.Sphere(0.05), mass=1.0, position=(0.03, 0.0, 0.5),
+                              restitution=0.5)
+        world = rg.World(scene, dt=DT, config=rg.SolverConfig.for_scene(scene, sleep=False))
+        heights = []
+        for _ in range(480):
+            world.step()
+            heights.append(world.position[ball, 2])
+        return np.array(heights), world.position[box]
+
+    welded, box = bounce(True)
+    static, _ = bounce(False)
+    first = int(np.argmin(welded[:120]))  # the first impact, near 0.1 m (lands between steps)
+    assert welded[first] < 0.101 and welded[first:180].max() > 0.15  # and it bounced
+    np.testing.assert_allclose(welded[:180], static[:180], atol=1e-9)
+    np.testing.assert_allclose(welded, static, atol=3e-4)
+    np.testing.assert_allclose(welded[-24:], 0.1, atol=1e-6)
+    np.testing.assert_allclose(static[-24:], 0.1, atol=1e-6)
+    np.testing.assert_allclose(box, 0.0, atol=1e-12)

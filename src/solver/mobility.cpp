@@ -56,11 +56,16 @@ void form_mobility(double inverse_mass, const Mat3& inverse_inertia, const Joint
             size += 1;
         }
     }
-    // g = 1 - sum_k q_k (M^-1 q_k)^T / (q_k^T M^-1 q_k) over the orthogonal rows q_k
+    // g = 1 - sum_k q_k (M^-1 q_k)^T / (q_k^T M^-1 q_k) over the orthogonal rows q_k; a body
+    // held in all six directions (a fixed joint) gets exactly 0, not round-off, which a
+    // contact's K would take for a direction it can move in
     for (int r = 0; r < 6; ++r) {
         for (int c = 0; c < 6; ++c) {
-            out.g[r][c] = r == c ? 1.0 : 0.0;
+            out.g[r][c] = r == c && size < 6 ? 1.0 : 0.0;
         }
+    }
+    if (size == 6) {
+        return;
     }
     for (int k = 0; k < size; ++k) {
         const double* q = basis[k];
