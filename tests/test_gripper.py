@@ -39,9 +39,9 @@ def test_checkers_pass_in_every_mode(task, mode):
     with the gripper; the action has the finger command, the observation the opening."""
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*(infinity|needs a display).*")
-        env = make(task, obs_mode=mode, width=32, height=32)
+        env = make(task, obs_mode=mode, width=36, height=36)
         check_env(env)
-        sb3_check_env(make(task, obs_mode=mode, width=32, height=32))
+        sb3_check_env(make(task, obs_mode=mode, width=36, height=36))
     assert env.action_space.shape == (4,)
     obs, _ = env.reset(seed=0)
     if mode != "pixels":
@@ -49,7 +49,7 @@ def test_checkers_pass_in_every_mode(task, mode):
         assert obs["observation"].shape == (layout.size,)
         assert obs["observation"][layout.slice("fingers.width")] == pytest.approx(MAX_OPENING)
     if mode != "state":
-        assert obs["pixels"].shape == (32, 32, 3)
+        assert obs["pixels"].shape == (36, 36, 3)
 
 
 @pytest.mark.parametrize("task", ["Push", "Reach", "Slide", "Flip"])
