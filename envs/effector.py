@@ -129,14 +129,18 @@ class FloatingEffector:
         """The driven body's velocity, m/s, shaped as ``position``."""
         return self.world.velocity[..., self.body, :]
 
-    def move(self, motions: np.ndarray, held: np.ndarray) -> None:
+    def move(self, motions: np.ndarray, held: np.ndarray,
+             sweeps: np.ndarray | None = None) -> None:
         """Set the driven body's velocity in every world for this env step: ``motions``
         (B, 3) in [-1, 1] scale ``STEP_DISTANCE``, with the force limit for the held objects
-        ``held`` (B,) int64 (indices into ``objects``, -1: none). The velocity is written into
-        the state as World.set_velocity would (the body never turns: omega stays 0), without
-        its checks: the target is finite by construction."""
+        ``held`` (B,) int64 (indices into ``objects``, -1: none) and the carried bodies, each
+        taken as the box it sweeps where ``sweeps`` (B, C, 3) m gives how far it moves
+        relative to the driven body over the step. The velocity is written into the state as
+        World.set_velocity would (the body never turns: omega stays 0), without its checks:
+        the target is finite by construction."""
         s = self.world.state
-        self.pads.command(np.ascontiguousarray(motions), s.position, s.rotation, s.velocity, held)
+        self.pads.command(np.ascontiguousarray(motions), s.position, s.rotation, s.velocity, held,
+                          sweeps)
 
     @classmethod
     def add_to(cls, scene) -> list[int]:

@@ -6,8 +6,9 @@ Panda's hand: one per world of a World, holding by friction alone.
 * **The hand** is a kinematic box driven exactly as the suction pad is (``envs/effector.py``:
   the first three action entries move it by up to ``STEP_DISTANCE`` per axis per env step,
   within ``GRIPPER_WORKSPACE``; it never turns) with the arm's force limit: a downward move
-  stops where the hand, a finger or the cube held between the fingers would rest on the
-  table, on a cube or on a fixture's box part under its footprint. Sideways nothing stops it.
+  stops where the hand, a finger (taken as the box it sweeps as it closes or opens in the
+  step) or the cube held between the fingers would rest on the table, on a cube or on a
+  fixture's box part under its footprint. Sideways nothing stops it.
 * **The fingers** are two dynamic boxes on prismatic joints to the hand, sliding along the
   world's y axis, each driven by a joint motor of at most ``GRIP_FORCE`` (Panda's 70 N
   continuous force): the opening between the pads runs from 0 to ``MAX_OPENING`` (8 cm, as
@@ -141,10 +142,18 @@ class ParallelGripper(FloatingEffector):
         """Start an env step in every world: ``motions`` (B, 3) in [-1, 1] scale
         ``STEP_DISTANCE``; ``grips`` (B,) in [-1, 1] the finger commands (the opening's rate
         over ``FINGER_SPEED``: > 0 opens, < 0 closes)."""
-        held = self.grasp(slice(None))[0]
-        self.move(motions, held)
+        held, width = self.grasp(slice(None))
         closing = np.zeros(self.num_worlds) if grips is None else -0.5 * FINGER_SPEED * grips
-        speeds = np.where((closing > 0.0) & (held >= 0), self.press_speed, closing)
+        pressing = (closing > 0.0) & (held >= 0)
+        # the force limit takes each finger as the box it sweeps this step: its travel inward
+        # (outward where < 0) within what is left of it, none while it presses
+        travel = np.where(pressing, 0.0, np.clip(closing * self.step_time,
+                                                 -0.5 * (MAX_OPENING - width), 0.5 * width))
+        sweeps = np.zeros((self.num_worlds, 2, 3))
+        sweeps[:, 0, 1] = travel
+        sweeps[:, 1, 1] = -travel
+        self.move(motions, held, sweeps)
+        speeds = np.where(pressing, self.press_speed, closing)
         # the motors' targets written as World.set_joint_motor would, without its checks (the
         # commands are finite and clipped); a world whose targets change is woken, as that
         # call wakes it: sleeping cannot see a motor's target

@@ -117,7 +117,7 @@ def test_the_fingers_move_at_the_commanded_rate_within_their_travel():
 
 def test_the_force_limit_stops_the_fingers_on_the_table_and_on_a_cube():
     """A downward move stops where the finger tips rest on the table (the hand's centre
-    FINGER_DROP up), or, closed over a cube, on its top."""
+    FINGER_DROP up), or, closing over a cube, on its top, which is left where it was."""
     env = make("PickAndPlace")
     env.reset(seed=0)
     cube = env.world.position[env.cubes[0]].copy()
@@ -126,9 +126,10 @@ def test_the_force_limit_stops_the_fingers_on_the_table_and_on_a_cube():
     for _ in range(6):
         env.step([0, 0, -1, 1])
     assert env.gripper.position[2] == pytest.approx(FINGER_DROP, abs=1e-9)
-    drive(env, (cube[0], cube[1], GRIPPER_START[2]), -1.0)  # over the cube,
-    for _ in range(4):
-        env.step([0, 0, 0, -1])  # closed
+    # over the cube, half closed and closing as it goes down: the fingers sweep over the
+    # cube's top within the first step down, so they stop on it
+    drive(env, (cube[0], cube[1], GRIPPER_START[2]), -1.0)
+    assert 2 * CUBE_HALF - 0.01 < env.gripper.grasp(slice(None))[1][0] < 2 * CUBE_HALF + 0.01
     for _ in range(6):
         env.step([0, 0, -1, -1])
     assert env.gripper.position[2] == pytest.approx(2 * CUBE_HALF + FINGER_DROP, abs=1e-9)

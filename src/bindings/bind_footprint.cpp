@@ -91,7 +91,7 @@ void bind_footprint(nb::module_& m) {
         .def(
             "command",
             [](Pads& p, nb::handle motions, nb::handle positions, nb::handle rotations,
-               nb::handle velocities, nb::handle held) {
+               nb::handle velocities, nb::handle held, nb::handle carried_sweeps) {
                 const int64_t b = p.targets.size(), k = p.objects.size();
                 const auto mo = array_arg<const double>(motions, "Pads.command: motions", {b, 3});
                 const auto x = array_arg<const double>(positions, "Pads.command: positions",
@@ -110,6 +110,13 @@ void bind_footprint(nb::module_& m) {
                 if (p.pad >= n) {
                     throw nb::value_error("Pads.command: the pad is not a body of positions");
                 }
+                Span<const Vec3> sweeps;
+                if (!carried_sweeps.is_none()) {
+                    const auto sw = array_arg<const double>(
+                        carried_sweeps, "Pads.command: carried_sweeps",
+                        {b, static_cast<int64_t>(p.carried.size()), 3});
+                    sweeps = rows<const Vec3>(sw);
+                }
                 FootprintQuery q;
                 q.positions = rows<const Vec3>(x);
                 q.rotations = rows<const Mat3>(r);
@@ -124,6 +131,7 @@ void bind_footprint(nb::module_& m) {
                 q.fixed_halves = {p.fixed_halves.data(), p.fixed_halves.size()};
                 q.carried = {p.carried.data(), p.carried.size()};
                 q.carried_halves = {p.carried_halves.data(), p.carried_halves.size()};
+                q.carried_sweeps = sweeps;
                 q.held = rows<const int64_t>(hd);
                 q.parts_x = p.parts_x.span();  // the pad, the held box, the carried bodies
                 q.parts_r = p.parts_r.span();
@@ -143,14 +151,16 @@ void bind_footprint(nb::module_& m) {
                 command_pads(q, c);
             },
             nb::arg("motions"), nb::arg("positions"), nb::arg("rotations"), nb::arg("velocities"),
-            nb::arg("held"),
+            nb::arg("held"), nb::arg("carried_sweeps").none() = nb::none(),
             "One env step's command of the gripper of every world: the pad's target is its "
             "centre plus step_distance x motion, clamped to [low, high]; a downward move stops "
-            "where the pad, the box it holds or a carried body would rest on the table, on the top of a box or "
-            "of a fixture's box part under its footprint (never lifting the pad); the pad's velocity is set to reach the "
-            "target in step_time. motions (B, 3) in [-1, 1]; positions (B, n, 3) m, rotations "
-            "(B, n, 3, 3) and velocities (B, n, 3) m/s (written: the pads') of every body; held "
-            "(B,) int64 the held box (an index into objects, -1: none).")
+            "where the pad, the box it holds or a carried body would rest on the table, on the "
+            "top of a box or of a fixture's box part under its footprint (never lifting the "
+            "pad); the pad's velocity is set to reach the target in step_time. motions (B, 3) in "
+            "[-1, 1]; positions (B, n, 3) m, rotations (B, n, 3, 3) and velocities (B, n, 3) m/s "
+            "(written: the pads') of every body; held (B,) int64 the held box (an index into "
+            "objects, -1: none); carried_sweeps None or (B, C, 3) m how far each carried body "
+            "moves relative to the pad over the step (its part is then the box it sweeps).")
         .def(
             "grasps",
             [](Pads& p, nb::handle positions, nb::handle rotations, nb::handle worlds,

@@ -158,9 +158,18 @@ void lowest_centres(const FootprintQuery& q, Span<double> out) {
         }
         for (int64_t c = 0; c < q.carried.size; ++c) {  // moved with the pad, as the held box
             const int64_t body = first + q.carried[c];
+            const Mat3& r = q.rotations[body];
             q.parts_x[parts] = add(q.positions[body], sub(target, pad));
             q.parts_half[parts] = q.carried_halves[c];
-            q.parts_r[parts] = q.rotations[body];
+            q.parts_r[parts] = r;
+            if (q.carried_sweeps.size > 0) {  // the box it sweeps: half the move on each side
+                const Vec3 d = q.carried_sweeps[w * q.carried.size + c];
+                const Vec3 local = rotate_inverse(r, d);
+                q.parts_x[parts] = add(q.parts_x[parts], scale(0.5, d));
+                q.parts_half[parts] = add(q.parts_half[parts],
+                                          {0.5 * std::abs(local.x), 0.5 * std::abs(local.y),
+                                           0.5 * std::abs(local.z)});
+            }
             ++parts;
         }
         for (int64_t k = 0; k < q.objects.size; ++k) {

@@ -37,6 +37,10 @@ struct FootprintQuery {
     // half extents carried_halves[i]; C may be 0 (the suction pad).
     Span<const int64_t> carried;        // (C,) body indices
     Span<const Vec3> carried_halves;    // (C,) m
+    // (B C,) m: how far each carried body moves relative to the pad over the step (a finger
+    // closing or opening), world frame; its part is then the box it sweeps (the box's place
+    // at the start and at the end, and between). Empty: none moves.
+    Span<const Vec3> carried_sweeps;
     // Work rows, overwritten world by world: the parts (the pad, then the held box, then the
     // carried bodies) and the boxes of the world in hand.
     Span<Vec3> parts_x;     // (2 + C,) m
