@@ -291,14 +291,15 @@ def gripper(scene: rg.Scene, centre, cube_mass: float, grip: float, friction: fl
     c, (fx, _, fz) = GRASP_CUBE_HALF, GRASP_FINGER_HALF
     if ground:
         scene.add_ground(friction=friction)
-    hand = scene.add_body(rg.Box((c + 2 * fx, 0.02, 0.01)), position=(x, y, z + fz + 0.03),
-                          kinematic=True, friction=friction)
+    bottom = z - c + 0.005  # the fingers' bottom, 5 mm above the cube's
+    hand = scene.add_body(rg.Box((c + 2 * fx, 0.02, 0.01)), position=(x, y, bottom + 2 * fz + 0.01),
+                          kinematic=True, friction=friction)  # on the fingers' tops
     cube = scene.add_body(rg.Box((c, c, c)), mass=cube_mass, position=(x, y, z),
                           friction=friction)
     speed = grip * GRASP_SLOWEST_DT / GRASP_FINGER_MASS
     fingers, joints = [], []
     for side in (-1.0, 1.0):
-        at = (x + side * (c + fx), y, z + fz - c + 0.005)  # 5 mm above the cube's bottom
+        at = (x + side * (c + fx), y, bottom + fz)
         finger = scene.add_body(rg.Box(GRASP_FINGER_HALF), mass=GRASP_FINGER_MASS, position=at,
                                 friction=friction)
         joints.append(scene.add_prismatic_joint(
