@@ -97,11 +97,11 @@ class SolverConfig:
         a plank at one of two bars lifted it at the other, and it rocked for good).
     patch_reactions: each patch's impulse is booked to the pairs behind it by the lever
         rule (``World.contacts`` then reports each support's reaction; off, the
-        whole patch's impulse goes to one pair), and passes the sliding friction it applies
-        against a dynamic support on to that support as its reaction, then resolves the
-        levels again (off, that reaction is lost: a block pulled under another on a
-        frictionless floor gained 1.2% momentum beyond F T; static friction's is still lost,
-        see docs/architecture.md).
+        whole patch's impulse goes to one pair), and passes what a sliding patch or a single
+        impulse applies across gravity against a dynamic support on to that support as its
+        reaction, then resolves the levels again (off, that reaction is lost: a block pulled
+        under another on a frictionless floor gained 1.2% momentum beyond F T; a static patch
+        wrench's is still lost, see docs/architecture.md).
     exact_symmetric: a body with exactly two equal principal moments, free of torque in a
         position update, turns by its exact torque-free motion (a turn about L and a spin
         about its axis, ``symmetric_rotation`` in ``src/solver/integrate.h``) instead of the
