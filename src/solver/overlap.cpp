@@ -15,9 +15,10 @@ namespace {
 constexpr int OVERLAP_ITERATIONS = 4;
 
 // With Settings::overlap_energy: the potential energy -M g . shift that a lift gives a dynamic
-// body held only by static bodies (w.pairs_of counts, as scratch, its acting pairs with a
-// movable partner and its joints: the position update counts them again) is taken from its
-// kinetic energy, by scaling its velocity and angular momentum by one factor (to rest where
+// body held only by static bodies is taken from its kinetic energy (w.pairs_of counts, as
+// scratch, its joints and its pairs with a movable partner that took an impulse, have
+// contacts within the speculative margin or were not found once for the step; the position
+// update counts again), by scaling its velocity and angular momentum by one factor (to rest where
 // its kinetic energy is less). A scaled velocity field approaches no static partner it did
 // not approach, slides in the same directions and keeps its axis of rotation, so the contact
 // conditions the impulse stages left hold still; the lift itself is what the projection
@@ -31,7 +32,8 @@ void pay_for_lifts(StepContext& w, int64_t pairs) {
     }
     for (int64_t k = 0; k < pairs; ++k) {
         const Vec3 j = w.pair_impulse[k];
-        if (j.x == 0.0 && j.y == 0.0 && j.z == 0.0) {
+        const bool near = w.contacts.first[k] < 0 || w.contacts.count[k] > 0;
+        if (j.x == 0.0 && j.y == 0.0 && j.z == 0.0 && !near) {
             continue;
         }
         const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
