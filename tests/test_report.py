@@ -233,6 +233,15 @@ def test_a_block_pulled_under_a_sliding_block_keeps_its_momentum(dt):
     assert run_case("block_on_block", dt, patch_reactions=False)[0] > 1e-2
 
 
+def test_a_block_pulled_under_a_sticking_cube_keeps_its_momentum_to_5e_5():
+    """The cube sticks (mu = 1): the momentum is F T but for the slip the contact passes leave,
+    which shock propagation stops against the frozen block without passing the static
+    wrench's reaction on (measured 4.8e-5 at 1/240 and 3.6e-5 at 1/30; the aim, 1e-6, is not
+    met). The bound guards against it growing."""
+    for dt in (1 / 240, 1 / 30):
+        assert run_case("block_sticking", dt)[0] < 1e-4
+
+
 def test_a_fast_heavy_top_precesses_at_the_closed_form_rate():
     """|omega| dt = 1.25 rad: the order-2 update alone made this flat top hop and precess at
     250 times the closed form with its energy up 38% in 2 s (exact_symmetric off, checked
