@@ -27,12 +27,13 @@ STEP_TIME = 0.04
 """s of simulated time per env step."""
 SOLVER_STEPS = 10
 """solver steps per env step (dt = 4 ms, as panda-gym's 2 ms x 20 and Fetch's 2 ms x 20)."""
-SOLVER_SETTINGS = {"overlap_correction": 0.2, "continuous": False, "contact_patches": False,
-                   "patch_reactions": False, "exact_symmetric": False}
+SOLVER_SETTINGS = {"overlap_correction": 0.2, "overlap_energy": False, "continuous": False,
+                   "contact_patches": False, "patch_reactions": False, "exact_symmetric": False}
 """SolverConfig fields where the v0 tasks differ from the library's defaults. An env id's
 dynamics are fixed with its version (Gymnasium's rule): the v0 ids' results, models and
-datasets were made removing 20% of an excess overlap per step; the library's default removes
-all of it, which changes Throw's and Stack's episodes in their bits. They were made without
+datasets were made removing 20% of an excess overlap per step, its lifts free of cost; the
+library's default removes all of it, which changes Throw's and Stack's episodes in their bits,
+and takes a lift's potential energy from the body's kinetic energy. They were made without
 continuous collision too: ``for_scene`` leaves it out of the built scenes (nothing moves
 until the gripper does), but a thrown cube moves up to 9 mm a step against the bin's 5 mm
 half walls, so with it Throw's episodes change in their bits. They resolved patches between

@@ -364,14 +364,14 @@ BLOCK_MU = 0.3
 """Friction coefficient between the two blocks of ``block_on_block`` (its floor has none)."""
 
 
-def block_on_block() -> rg.Scene:
+def block_on_block(mu: float = BLOCK_MU, behind: float = 0.4) -> rg.Scene:
     """A 1 kg block 1 x 0.2 x 0.1 m (body 1) on a frictionless ground, and a 1 kg standard cube
-    (body 2) resting on it 0.4 m behind its centre, mu = BLOCK_MU between the two."""
+    (body 2) resting on it ``behind`` m behind its centre, ``mu`` between the two."""
     scene = rg.Scene()
     scene.add_ground(friction=0.0)
-    scene.add_body(rg.Box((0.5, 0.1, 0.05)), mass=1.0, friction=BLOCK_MU, position=(0, 0, 0.05))
-    scene.add_body(rg.Box((CUBE_HALF,) * 3), mass=1.0, friction=BLOCK_MU,
-                   position=(-0.4, 0, 0.1 + CUBE_HALF))
+    scene.add_body(rg.Box((0.5, 0.1, 0.05)), mass=1.0, friction=mu, position=(0, 0, 0.05))
+    scene.add_body(rg.Box((CUBE_HALF,) * 3), mass=1.0, friction=mu,
+                   position=(-behind, 0, 0.1 + CUBE_HALF))
     return scene
 
 

@@ -105,6 +105,7 @@ void bind_settings(nb::module_& m) {
         .def_rw("detect_every_pass", &Settings::detect_every_pass)
         .def_rw("keep_energy", &Settings::keep_energy)
         .def_rw("overlap_correction", &Settings::overlap_correction)
+        .def_rw("overlap_energy", &Settings::overlap_energy)
         .def_rw("joint_passes", &Settings::joint_passes)
         .def_rw("continuous", &Settings::continuous)
         .def_rw("contact_patches", &Settings::contact_patches)

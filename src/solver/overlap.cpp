@@ -2,8 +2,10 @@
 #include "solver/overlap.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "solver/contacts.h"
+#include "solver/joints.h"
 
 namespace rg {
 
@@ -11,6 +13,59 @@ namespace {
 
 // Gauss-Seidel sweeps over the pairs; they stop once one moves nothing.
 constexpr int OVERLAP_ITERATIONS = 4;
+
+// With Settings::overlap_energy: the potential energy -M g . shift that a lift gives a dynamic
+// body held only by static bodies is taken from its kinetic energy (w.pairs_of counts, as
+// scratch, its joints and its pairs with a movable partner that took an impulse, have
+// contacts within the speculative margin or were not found once for the step; the position
+// update counts again), by scaling its velocity and angular momentum by one factor (to rest where
+// its kinetic energy is less). A scaled velocity field approaches no static partner it did
+// not approach, slides in the same directions and keeps its axis of rotation, so the contact
+// conditions the impulse stages left hold still; the lift itself is what the projection
+// had added (a top spinning on its tip, lifted each step out of the depth its nutation within
+// the step sank it to, gained 0.5% of its energy in 2 s at dt = 1/240).
+void pay_for_lifts(StepContext& w, int64_t pairs) {
+    const int n = w.num_bodies();
+    const BodyModel& model = w.model;
+    for (int i = 0; i < n; ++i) {
+        w.pairs_of[i] = 0;
+    }
+    for (int64_t k = 0; k < pairs; ++k) {
+        const Vec3 j = w.pair_impulse[k];
+        const bool near = w.contacts.first[k] < 0 || w.contacts.count[k] > 0;
+        if (j.x == 0.0 && j.y == 0.0 && j.z == 0.0 && !near) {
+            continue;
+        }
+        const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
+        w.pairs_of[a] += model.motion[b] != STATIC ? 1 : 0;
+        w.pairs_of[b] += model.motion[a] != STATIC ? 1 : 0;
+    }
+    const JointRows& joints = w.joints;
+    for (int64_t j = 0; j < joints.size(); ++j) {
+        w.pairs_of[joints.body_a[j]] += 1;
+        if (joints.body_b[j] != WORLD_BODY) {
+            w.pairs_of[joints.body_b[j]] += 1;
+        }
+    }
+    const BodyStates& s = w.bodies;
+    for (int i = 0; i < n; ++i) {
+        const Vec3 shift = w.overlap_shift[i];
+        if (model.motion[i] != DYNAMIC || w.pairs_of[i] != 0 || model.inverse_mass[i] == 0.0) {
+            continue;
+        }
+        const double lift = -dot(model.gravity, shift) / model.inverse_mass[i];  // J
+        if (!(lift > 0.0)) {
+            continue;
+        }
+        const Vec3 v = s.velocity[i];
+        const double kinetic =
+            0.5 * (dot(v, v) / model.inverse_mass[i] + dot(s.angular_velocity[i], s.angular_momentum[i]));
+        const double f = lift < kinetic ? std::sqrt(1.0 - lift / kinetic) : 0.0;
+        s.velocity[i] = scale(f, v);
+        s.angular_momentum[i] = scale(f, s.angular_momentum[i]);
+        s.angular_velocity[i] = scale(f, s.angular_velocity[i]);
+    }
+}
 
 }  // namespace
 
@@ -55,6 +110,9 @@ void correct_overlap(StepContext& w, int64_t pairs, double dt, double fraction) 
     if (moved_any) {
         for (int i = 0; i < w.num_bodies(); ++i) {
             w.bodies.position[i] = add(w.bodies.position[i], shift[i]);
+        }
+        if (w.settings->overlap_energy) {
+            pay_for_lifts(w, pairs);
         }
     }
 }

@@ -13,10 +13,12 @@
 // stabilisation, left such sweeps 0.9-1.1 mm deep in the 1000-body pile, where removing it all
 // leaves 0.7-0.8 mm at worst and ~0.3 mm typically, with every other report figure the same or
 // smaller), Gauss-Seidel over the contacts with their depths updated as bodies move, a few
-// iterations. Only positions move, by translations split by inverse mass: velocities,
-// orientations and so every body's kinetic energy and angular momentum are untouched, and a
-// resting contact (overlap far below the slop) is left exactly as it is (stacks stay bitwise at
-// rest, sleeping stays exact).
+// iterations. Only positions move, by translations split by inverse mass: orientations are
+// untouched, and a resting contact (overlap far below the slop) is left exactly as it is
+// (stacks stay bitwise at rest, sleeping stays exact). A lift against gravity adds potential
+// energy, which with Settings::overlap_energy the lifted body pays from its kinetic energy
+// where only static bodies touch it (overlap.cpp's pay_for_lifts); otherwise velocities are
+// untouched.
 #pragma once
 
 #include "solver/world.h"

@@ -11,7 +11,10 @@
 // A frozen support takes no impulse; with Settings::patch_reactions the sliding friction a
 // body gets against a frozen dynamic support is held back as the support's reaction, applied
 // once the levels are done, and the levels are resolved again (solver.h), so friction
-// between bodies keeps momentum.
+// between bodies keeps momentum. A resolve that must apply nothing (its bodies' velocities
+// as at its last resolve, which applied nothing: quiet) is skipped, bit for bit the same: in
+// the falling pile of 1000 the reactions' rounds ran all 4 in 203 of the first 231 stages,
+// from level 1 up, and 89% of their resolves applied nothing.
 #include <algorithm>
 
 #include "solver/contacts.h"
@@ -117,19 +120,90 @@ int resolve_supported_body(StepContext& w, int64_t node, int64_t current, double
            resolve_patches(w, body, {true, false}, wide, count, dt, SHOCK, 0.0, reactions);
 }
 
-// resolve_supported_body for nodes by_level[start:end] of level `current`; impulses applied.
+// The next tick of graph.clock, which orders the stage's resolves and velocity changes.
+int64_t tick(const Graph& graph) { return ++graph.clock[0]; }
+
+// Body i's velocity changed (graph.changed_at).
+void mark_changed(const Graph& graph, int i) { graph.changed_at[i] = tick(graph); }
+
+// Would resolving node `node` (of level `current`) against its frozen supports apply nothing
+// for sure? So when its last such resolve applied nothing (graph.quiet_since) and neither it
+// nor a frozen dynamic support of it has changed its velocity since: a resolve is a function
+// of those velocities and of its pairs' step totals (unchanged: nothing was applied to them),
+// the contacts' detection being as that resolve left it. Skipping it is exact, bit for bit.
+bool quiet(const StepContext& w, int64_t node, int64_t current) {
+    const Graph& graph = w.graph;
+    const int body = static_cast<int>(graph.nodes[node]);
+    const int64_t since = graph.quiet_since[body];
+    if (since < 0 || graph.changed_at[body] > since) {
+        return false;
+    }
+    for (int64_t s = graph.body_pair_start[node]; s < graph.body_pair_start[node + 1]; ++s) {
+        const int64_t k = graph.body_pairs[s];
+        const int other = w.lists.pair_a[k] == body ? w.lists.pair_b[k] : w.lists.pair_a[k];
+        if (w.model.motion[other] == DYNAMIC && graph.level[graph.node_of[other]] < current &&
+            graph.changed_at[other] > since) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// resolve_supported_body for nodes by_level[start:end] of level `current`, but those that are
+// quiet; impulses applied.
 int resolve_level_supports(StepContext& w, int64_t start, int64_t end, int64_t current, double dt,
                            int* reactions) {
+    const Graph& graph = w.graph;
     int applied = 0;
     for (int64_t s = start; s < end; ++s) {
-        applied += resolve_supported_body(w, w.graph.by_level[s], current, dt, reactions);
+        const int64_t node = graph.by_level[s];
+        if (quiet(w, node, current)) {
+            continue;
+        }
+        const int body = static_cast<int>(graph.nodes[node]);
+        const int took = resolve_supported_body(w, node, current, dt, reactions);
+        if (took > 0) {
+            mark_changed(graph, body);
+            graph.quiet_since[body] = -1;
+        } else {
+            graph.quiet_since[body] = tick(graph);
+        }
+        applied += took;
+    }
+    return applied;
+}
+
+// Resolve the pairs inside level `current` (both bodies movable), but those whose last
+// resolve applied nothing with neither body changed since (exact, as quiet); impulses applied.
+int resolve_level_pairs(StepContext& w, int64_t current, double dt) {
+    const Graph& graph = w.graph;
+    int applied = 0;
+    for (int64_t s = graph.level_pair_start[current]; s < graph.level_pair_start[current + 1];
+         ++s) {
+        const int64_t k = graph.level_pairs[s];
+        const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
+        const int64_t since = graph.pair_quiet_since[k];
+        if (since >= 0 && graph.changed_at[a] < since && graph.changed_at[b] < since) {
+            continue;
+        }
+        const int took = resolve_pair(w, k, dt, NO_LOOKAHEAD, SHOCK, 0.0, {true, true});
+        if (took > 0) {
+            mark_changed(graph, a);
+            mark_changed(graph, b);
+            graph.pair_quiet_since[k] = -1;
+        } else {
+            graph.pair_quiet_since[k] = tick(graph);
+        }
+        applied += took;
     }
     return applied;
 }
 
 // The levels of the m nodes in order from level `lowest` up, each against its frozen supports,
 // then its inside pairs (see top); returns how many frictional reactions were passed on to
-// frozen supports.
+// frozen supports. Resolves that would apply nothing for sure are skipped (quiet): the
+// second sweep of a level that settled in its first, and in the rounds again for reactions
+// every body that neither they nor the changes they made reached.
 int resolve_levels(StepContext& w, int64_t m, double dt, int64_t lowest) {
     const Graph& graph = w.graph;
     int reactions = 0;
@@ -148,12 +222,7 @@ int resolve_levels(StepContext& w, int64_t m, double dt, int64_t lowest) {
                 // each body of the level against all its frozen supports at once
                 int applied = resolve_level_supports(w, start, end, current, dt, &reactions);
                 // then the pairs inside the level, both bodies movable
-                int inside = 0;
-                for (int64_t s = graph.level_pair_start[current];
-                     s < graph.level_pair_start[current + 1]; ++s) {
-                    inside += resolve_pair(w, graph.level_pairs[s], dt, NO_LOOKAHEAD, SHOCK, 0.0,
-                                           {true, true});
-                }
+                const int inside = resolve_level_pairs(w, current, dt);
                 // and the supports again: the last impulse of a sweep must not leave a body of
                 // the level moving into a frozen one (a box pressed sideways by its neighbour
                 // into a wall sank into it, 3 mm in 1 s, when the sweep ended on their pair)
@@ -188,6 +257,7 @@ int64_t apply_reactions(StepContext& w) {
         s.angular_velocity[i] = rotate(s.inverse_inertia[i], s.angular_momentum[i]);
         w.reaction[i] = {0.0, 0.0, 0.0};
         w.reaction[n + i] = {0.0, 0.0, 0.0};
+        mark_changed(w.graph, i);
         lowest = std::min(lowest, w.graph.level[w.graph.node_of[i]]);
     }
     return lowest;
@@ -207,6 +277,19 @@ bool brought_together(StepContext& w, int64_t pairs, double dt) {
     return false;
 }
 
+// A new graph: no resolve of the m nodes or the pairs has been found quiet yet.
+void forget_quiet(StepContext& w, int64_t pairs, int64_t m) {
+    const Graph& graph = w.graph;
+    for (int64_t v = 0; v < m; ++v) {
+        graph.quiet_since[graph.nodes[v]] = -1;
+        graph.changed_at[graph.nodes[v]] = -1;
+    }
+    for (int64_t k = 0; k < pairs; ++k) {
+        graph.pair_quiet_since[k] = -1;
+    }
+    graph.clock[0] = 0;
+}
+
 }  // namespace
 
 void propagate_world_shock(StepContext& w, int64_t pairs, double dt) {
@@ -217,6 +300,7 @@ void propagate_world_shock(StepContext& w, int64_t pairs, double dt) {
         contact_levels(graph, w.model.motion, edges, m);
         pairs_by_body(graph, w.lists, pairs, m);
         pairs_by_level(graph, w.lists, pairs, m);
+        forget_quiet(w, pairs, m);
         // friction's reactions passed on to frozen supports (Settings::patch_reactions) move
         // them against their own supports: the levels are resolved again from the ground up
         // while any were passed on (a block sliding on a block on a frictionless floor: once)

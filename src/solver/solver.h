@@ -68,9 +68,9 @@ int resolve_pair(StepContext& w, int64_t k, double dt, Vec3 lookahead, ImpulseMo
 // Resolve body a's contacts in `set` (normals towards a; each against the body set.partner[i])
 // in stage `mode`; returns the number of impulses applied (solver.cpp says how).
 // reactions (shock propagation's resolves against frozen bodies): where given, with
-// Settings::patch_reactions, the sliding friction applied against a frozen dynamic partner is
-// held back for it reversed (w.reaction), and *reactions counts how often (the caller applies
-// them and resolves the levels again).
+// Settings::patch_reactions, what a sliding patch wrench or a single impulse applied against
+// a frozen dynamic partner across gravity is held back for it reversed (w.reaction), and
+// *reactions counts how often (the caller applies them and resolves the levels again).
 int resolve_patches(StepContext& w, int a, Movable movable, const ContactSet& set, int64_t count,
                     double dt, ImpulseMode mode, double ramp_e, int* reactions = nullptr);
 

@@ -58,7 +58,12 @@ constexpr int SNAPSHOT = 25;
     X(int64_t, body_pair_start, n + 1, 0)  /* each node's touching pairs, CSR */            \
     X(int64_t, body_pairs, 2 * p, 0)                                                        \
     X(int64_t, level_pair_start, n + 2, 0) /* the touching pairs inside each level, CSR */  \
-    X(int64_t, level_pairs, p, 0)
+    X(int64_t, level_pairs, p, 0)                                                           \
+    X(int64_t, clock, 1, 0)                /* shock.cpp's count of resolves and changes */  \
+    X(int64_t, changed_at, n, -1)          /* per body: clock when its velocity changed */  \
+    X(int64_t, quiet_since, n, -1)         /* per body: clock of its last resolve against */ \
+                                           /* its supports if it applied nothing, else -1 */ \
+    X(int64_t, pair_quiet_since, p, -1)    /* the same per pair inside a level */
 
 struct Graph {
     RG_GRAPH_ROWS(RG_SPAN_FIELD)
