@@ -114,6 +114,11 @@ class ParallelGripper(FloatingEffector):
         self.all_worlds = np.arange(self.num_worlds, dtype=np.int64)
         self.motor_speeds = world.core.joint_motor_speed
         """(B, J) m/s: the core's motor targets, written in place (``command``)."""
+        self.idle = np.zeros(self.num_worlds)
+        """(B,) m/s: the closing speed of a task without a finger command (none)."""
+        self.sweeps = np.zeros((self.num_worlds, 2, 3))
+        """(B, 2, 3) m: each finger's sweep over the env step (``command``'s work array; only
+        [:, :, 1] is written, the rest stays 0)."""
         self.press_speed = GRIP_FORCE * world.dt / FINGER_MASS
         """m/s: the motors' target while the pads press a cube: the speed GRIP_FORCE gives a
         finger in a solver step, so that a finger the cube stops is pressed with it."""
@@ -143,13 +148,15 @@ class ParallelGripper(FloatingEffector):
         ``STEP_DISTANCE``; ``grips`` (B,) in [-1, 1] the finger commands (the opening's rate
         over ``FINGER_SPEED``: > 0 opens, < 0 closes)."""
         held, width = self.grasp(slice(None))
-        closing = np.zeros(self.num_worlds) if grips is None else -0.5 * FINGER_SPEED * grips
+        closing = self.idle if grips is None else -0.5 * FINGER_SPEED * grips
         pressing = (closing > 0.0) & (held >= 0)
         # the force limit takes each finger as the box it sweeps this step: its travel inward
-        # (outward where < 0) within what is left of it, none while it presses
-        travel = np.where(pressing, 0.0, np.clip(closing * self.step_time,
-                                                 -0.5 * (MAX_OPENING - width), 0.5 * width))
-        sweeps = np.zeros((self.num_worlds, 2, 3))
+        # (outward where < 0) within what is left of it, none while it presses (np.clip's
+        # bounds by np.maximum and np.minimum: the same values, without its Python wrapper)
+        travel = np.minimum(np.maximum(closing * self.step_time, -0.5 * (MAX_OPENING - width)),
+                            0.5 * width)
+        travel[pressing] = 0.0
+        sweeps = self.sweeps
         sweeps[:, 0, 1] = travel
         sweeps[:, 1, 1] = -travel
         self.move(motions, held, sweeps)
@@ -158,10 +165,10 @@ class ParallelGripper(FloatingEffector):
         # commands are finite and clipped); a world whose targets change is woken, as that
         # call wakes it: sleeping cannot see a motor's target
         targets = self.motor_speeds
-        changed = np.flatnonzero(targets[:, self.joints[0]] != speeds)
-        if changed.size:
+        changed = targets[:, self.joints[0]] != speeds
+        if changed.any():
             targets[:, self.joints] = speeds[:, None]
-            for world in changed.tolist():
+            for world in np.flatnonzero(changed).tolist():
                 self.world.core.forget(world, world + 1)
 
     def grasp(self, worlds) -> tuple[np.ndarray, np.ndarray]:

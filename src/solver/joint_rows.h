@@ -54,6 +54,8 @@ constexpr int MAX_JOINT_ROWS = 6;
 #define RG_JOINT_SOLVE_ROWS(X)                                                                 \
     X(JointRow, rows, r, JointRow{})   /* the rows, at the poses their errors are for */      \
     X(JointRow, along, r, JointRow{})  /* the same rows at the current poses */               \
+    X(Vec3, turn_a, r, Vec3{})         /* I_a(t)^-1 aa of each row of the system's columns */ \
+    X(Vec3, turn_b, r, Vec3{})         /* I_b(t)^-1 ab (0 where b takes no impulse) */        \
     X(int32_t, row_joint, r, 0)        /* each row's joint */                                 \
     X(int32_t, row_role, r, 0)         /* EQUALITY or the free coordinate's condition */      \
     X(double, target, r, 0.0)          /* m/s or rad/s, each row's wanted rate */             \

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "solver/mobility.h"
+#include "solver/solver.h"
 
 namespace rg {
 
@@ -154,24 +155,45 @@ double rate(const StepContext& w, const JointRows& joints, const Row& row, int64
     return dot(row.la, a.v) + dot(row.aa, a.w) + dot(row.lb, b.v) + dot(row.ab, b.w);
 }
 
-// J_p M^-1 J_q^T for row p of joint jp and row q of joint jq: nonzero where they share a
-// movable body.
+// Does body i take joint impulses (a dynamic body, not the world frame)?
+bool takes_impulses(const StepContext& w, int i) {
+    return i != WORLD_BODY && w.model.motion[i] == DYNAMIC;
+}
+
+// joints.turn_a, turn_b of the system's columns [0, count): each row's angular parts turned
+// by its bodies' I(t)^-1, the part of M^-1 J_q^T that every coupling with column q needs,
+// formed once a solve instead of once an entry.
+void turn_columns(const StepContext& w, const JointRows& joints, int64_t count) {
+    const Vec3 none = {0.0, 0.0, 0.0};
+    for (int64_t q = 0; q < count; ++q) {
+        const int64_t j = joints.row_joint[q];
+        const int a = joints.body_a[j], b = joints.body_b[j];
+        joints.turn_a[q] = takes_impulses(w, a)
+                               ? rotate(w.bodies.inverse_inertia[a], joints.rows[q].aa) : none;
+        joints.turn_b[q] = takes_impulses(w, b)
+                               ? rotate(w.bodies.inverse_inertia[b], joints.rows[q].ab) : none;
+    }
+}
+
+// J_p M^-1 J_q^T for row p of joint jp and column q of the system (joints.rows[q], turned by
+// turn_columns): nonzero where they share a movable body.
 double coupling(const StepContext& w, const JointRows& joints, const Row& p, int64_t jp,
-                const Row& q, int64_t jq) {
+                int64_t q) {
+    const int64_t jq = joints.row_joint[q];
+    const Row& row = joints.rows[q];
     const int pa = joints.body_a[jp], pb = joints.body_b[jp];
     const int qa = joints.body_a[jq], qb = joints.body_b[jq];
     double sum = 0.0;
-    const auto term = [&](int body, Vec3 pl, Vec3 pang, Vec3 ql, Vec3 qang) {
-        if (body == WORLD_BODY || w.model.motion[body] != DYNAMIC) {
+    const auto term = [&](int body, Vec3 pl, Vec3 pang, Vec3 ql, Vec3 turned) {
+        if (!takes_impulses(w, body)) {
             return;
         }
-        sum += w.model.inverse_mass[body] * dot(pl, ql) +
-               dot(pang, rotate(w.bodies.inverse_inertia[body], qang));
+        sum += w.model.inverse_mass[body] * dot(pl, ql) + dot(pang, turned);
     };
-    if (pa == qa) term(pa, p.la, p.aa, q.la, q.aa);
-    if (pa == qb) term(pa, p.la, p.aa, q.lb, q.ab);
-    if (pb == qa) term(pb, p.lb, p.ab, q.la, q.aa);
-    if (pb == qb) term(pb, p.lb, p.ab, q.lb, q.ab);
+    if (pa == qa) term(pa, p.la, p.aa, row.la, joints.turn_a[q]);
+    if (pa == qb) term(pa, p.la, p.aa, row.lb, joints.turn_b[q]);
+    if (pb == qa) term(pb, p.lb, p.ab, row.la, joints.turn_a[q]);
+    if (pb == qb) term(pb, p.lb, p.ab, row.lb, joints.turn_b[q]);
     return sum;
 }
 
@@ -210,14 +232,13 @@ void solve_system(StepContext& w, Span<const Row> measured, int64_t count, bool 
     const JointRows& joints = w.joints;
     const int64_t width = count + 1;
     const Span<double> m = joints.matrix;
+    turn_columns(w, joints, count);
     double largest = 0.0;
     for (int64_t p = 0; p < count; ++p) {
         for (int64_t q = 0; q < count; ++q) {
             const bool out = skip_held && (joints.held[p] || joints.held[q]);
             m[p * width + q] = out ? (p == q ? 1.0 : 0.0)
-                                   : coupling(w, joints, measured[p], joints.row_joint[p],
-                                              joints.rows[q],
-                                              joints.row_joint[q]);
+                                   : coupling(w, joints, measured[p], joints.row_joint[p], q);
         }
         m[p * width + count] = skip_held && joints.held[p] ? 0.0 : joints.rhs[p];
         largest = std::max(largest, std::fabs(m[p * width + p]));
@@ -554,12 +575,13 @@ void stabilize_joint_positions(StepContext& w, double dt) {
     });
 }
 
-void form_joint_mobility(StepContext& w) {
+void form_joint_mobility(StepContext& w, int64_t pairs) {
     const JointRows& joints = w.joints;
+    count_pairs_of_bodies(w, pairs);
     for (int64_t c = 0; c + 1 < joints.component_start.size; ++c) {
         const int64_t first = joints.component_start[c], last = joints.component_start[c + 1];
         const int body = joints.body_a[joints.order[first]];
-        if (!w.model.articulated[body]) {
+        if (!w.model.articulated[body] || w.pairs_of[body] == 0) {
             continue;
         }
         int count = 0;  // the component's joints all hold `body` (its a) to immovable bodies

@@ -84,9 +84,12 @@ void stabilize_joint_positions(StepContext& w, double dt);
 // 10-link chain's, would show as energy the bodies do not have).
 void project_joint_velocities(StepContext& w, double dt);
 
-// Each articulated body's Mobility (mobility.h) at the current poses from its joints'
-// equality rows, with I(t)^-1 as formed for the step: before the impulse stages.
-void form_joint_mobility(StepContext& w);
+// The Mobility (mobility.h) of each articulated body in one of the first `pairs` listed pairs,
+// at the current poses from its joints' equality rows, with I(t)^-1 as formed for the step:
+// when the pairs are listed, before the impulse stages. Only a body in a pair takes contact
+// impulses (the one use of G), so a finger touching nothing costs no G; a relisting forms it
+// again for every paired body (the same poses and I(t)^-1: the same bits).
+void form_joint_mobility(StepContext& w, int64_t pairs);
 
 // Joint j's coordinate at the bodies' current poses: rad (revolute), m (prismatic), 0 (fixed).
 double joint_coordinate(const StepContext& w, int64_t j);

@@ -16,7 +16,8 @@
 // Exact for an articulated body: a dynamic body whose every joint holds it to a static or
 // kinematic body or the world frame (a leaf on an immovable base: BodyModel::articulated).
 // Its joint rows do not change within the impulse stages (the poses do not move and the base
-// takes no impulse), so G is formed once a step (form_joint_mobility, joints.h): prismatic,
+// takes no impulse), so G is formed once a step, for a body in a listed pair
+// (form_joint_mobility, joints.h): prismatic,
 // translation along the axis; revolute, rotation about the axis through the anchor (linear
 // and angular coupled); fixed, none. The free coordinate's rows, the motor and the limits,
 // are left free: the joint velocity stage applies the motor (within max_motor dt) and

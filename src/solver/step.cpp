@@ -135,6 +135,9 @@ Flow take_pairs(StepContext& w, int64_t count) {
     }
     *w.contacts.detected = 0;
     *w.rest.awake_pairs = count;
+    if (joints_on(w)) {
+        form_joint_mobility(w, count);  // joints.h: the paired articulated bodies' response
+    }
     return NEXT;
 }
 
@@ -160,16 +163,12 @@ Flow check_rest(StepContext& w) {
     return NEXT;
 }
 
-// Held bodies at their place, I^-1 for the step's orientations (and the articulated bodies'
-// response: mobility.h), and every box's reach cleared but a kept body's (sleep.h: it is as
-// when they were computed).
+// Held bodies at their place, I^-1 for the step's orientations, and every box's reach
+// cleared but a kept body's (sleep.h: it is as when they were computed).
 Flow prepare(StepContext& w) {
     const bool sleep = w.settings->sleep;
     place_attached(w.bodies, w.attached);
     refresh_inverse_inertia(w.bodies, w.model, kept_bodies(w));
-    if (joints_on(w)) {
-        form_joint_mobility(w);  // joints.h: the articulated bodies' contact response
-    }
     for (int i = 0; i < w.num_bodies(); ++i) {
         if (!(sleep && w.rest.kept[i])) {
             w.lists.reach[i] = 0.0;
