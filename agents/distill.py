@@ -340,8 +340,9 @@ def train_distill(env_id: str, settings: dict, *, seed: int, folder: Path, resum
     teacher_method = method(json.loads(teacher_path.with_suffix(".json").read_text()))
     student = DistilledPolicy(network, config)
 
-    chunks = [np.load(path) for path in sorted(checkpoints.glob("data_*.npz"),
-                                               key=lambda p: int(p.stem.split("_")[1]))]
+    # the iterations that latest.pt counts (a data file of a later one, written before a stop
+    # cut its checkpoint short, is played again)
+    chunks = [np.load(checkpoints / f"data_{i}.npz") for i in range(done_iterations)]
     frames = [c["frames"] for c in chunks]
     vectors = [c["vectors"] for c in chunks]
     labels = [c["labels"] for c in chunks]

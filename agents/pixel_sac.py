@@ -242,9 +242,10 @@ def train_pixel_sac(env_id: str, settings: dict, *, seed: int, folder: Path, res
         torch.set_rng_state(state["torch_rng"])
         rounds, curve = state["rounds"], state["curve"]
         clock = Clock(state["wall_seconds"], state["cpu_seconds"])
-        for path in sorted(checkpoints.glob("buffer_*.npz"),
-                           key=lambda p: int(p.stem.split("_")[1])):
-            buffer.add(dict(np.load(path)))
+        starts = sorted(int(p.stem.split("_")[1]) for p in checkpoints.glob("buffer_*.npz"))
+        for start in starts:  # (one of rounds past latest.pt's, cut short by a stop: played again)
+            if start < rounds:
+                buffer.add(dict(np.load(checkpoints / f"buffer_{start}.npz")))
         record = json.loads((folder / "run.json").read_text())
         record["resumed_at"] = record.get("resumed_at", []) + [rounds * round_size]
         record["timesteps"] = total * round_size

@@ -93,6 +93,8 @@ def test_the_pixel_recipe_trains_resumes_evaluates_and_records(tmp_path, capsys)
     first = json.loads((folder / "run.json").read_text())
     assert first["obs_mode"] == "pixels" and first["wall_seconds"] > first[
         "teacher_wall_seconds"] > 0
+    # a data file of an iteration that latest.pt does not count (a stop while it was written)
+    (folder / "checkpoints" / "data_1.npz").write_bytes(b"cut short")
     # goes on to a second iteration from the checkpoint, the curve kept
     folder = train(PUSH, obs_mode="pixels", timesteps=200, out=out, eval_episodes=2,
                    overrides=TINY, final_episodes=2, results=results, resume=folder / "checkpoints")
