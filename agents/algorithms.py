@@ -27,9 +27,12 @@ from pathlib import Path
 
 from rigid_gym.checks import BadFile
 
-ALGORITHMS = ("sac", "tqc", "ppo", "bc_sac", "distill")
-"""What ``rigid-gym train`` trains (hyperparams.yml's ``algo``; distill is the pixel recipe,
-``rigid_gym.agents.distill``)."""
+ALGORITHMS = ("sac", "tqc", "ppo", "bc_sac", "distill", "drq")
+"""What ``rigid-gym train`` trains (hyperparams.yml's ``algo``; distill and drq are the pixel
+recipes, ``rigid_gym.agents.distill`` and ``rigid_gym.agents.pixel_sac``)."""
+PIXEL_ALGORITHMS = ("distill", "drq")
+"""The pixel recipes (``--obs-mode pixels``): their zips hold a ``distill.make_network``'s
+weights and load as ``distill.DistilledPolicy``."""
 LEARNERS = ("sbx", "sb3", "batch")
 """The learners, fastest first (see the module docstring)."""
 SB3_PACKAGES = ("stable_baselines3", "sb3_contrib")
@@ -71,9 +74,9 @@ def algorithm_class(name: str, learner: str = "sb3"):
     """The class for ``name`` on ``learner``: sac, tqc, ppo, or bc_sac (SAC with a
     behaviour-cloning loss on the demonstrations, ``rigid_gym.agents.bc_sac``); on sbx, SBX's
     SAC and TQC and ``bc_sac.BCSACJax`` (ppo is SB3's, see ``learner_for``); on batch,
-    ``batch_ppo.BatchPPO``; distill: the pixel student's loader (``distill.DistilledPolicy``,
-    PyTorch whatever the learner)."""
-    if name == "distill":
+    ``batch_ppo.BatchPPO``; distill, drq: the pixel policies' loader
+    (``distill.DistilledPolicy``, PyTorch whatever the learner)."""
+    if name in PIXEL_ALGORITHMS:
         from .distill import DistilledPolicy
         return DistilledPolicy
     if learner == "batch" and name == "ppo":
@@ -136,8 +139,8 @@ def algorithm_of(path: str | Path) -> str:
     try:
         with zipfile.ZipFile(path) as archive:
             data = json.loads(archive.read("data"))
-        if data.get("algo") == "distill":  # a pixel student (distill.save_policy)
-            return "distill"
+        if data.get("algo") in PIXEL_ALGORITHMS:  # a pixel policy (distill.save_policy)
+            return data["algo"]
         module = data["policy_class"]["__module__"].split(".")
         if module[0] == "sbx":
             return f"sbx:{module[1]}"

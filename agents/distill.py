@@ -6,10 +6,11 @@ Chen et al. 2019, "Learning by Cheating"; DAgger, Ross et al. 2011).
 
 The student sees what a robot with a camera has: the frame (``size`` x ``size`` uint8 RGB
 from the batched renderer), the goal (``desired_goal``) and the pad's own state (its position
-and velocity, ``PROPRIOCEPTION``), never the cube's (``student_inputs`` picks these out of a
-``state+pixels`` observation and nothing else). The teacher is a committed state policy (Push:
-agents/models/push_sac_seed0.zip, SAC + HER); its training wall and CPU time (its result file
-in agents/results/) count in the pixel run's.
+and velocity, and whether it holds a cube in the tasks with a grip: ``PROPRIOCEPTION``), never
+the cubes' (``student_inputs`` picks these out of a ``state+pixels`` observation and nothing
+else). The teacher is a committed state policy (Push: agents/models/push_sac_seed0.zip, SAC +
+HER; Stack: stack_bcsac_seed0.zip, BC-SAC; Throw: throw_sac_seed0.zip); its training wall and
+CPU time (its result file in agents/results/) count in the pixel run's.
 
 Each iteration i plays ``episodes`` episodes in ``n_envs`` batched envs; at every step each
 env follows the teacher with probability beta_i = max(0, 1 - i / beta_iterations), else the
@@ -17,8 +18,9 @@ student's own action (so the data is more and more the student's own states), ev
 state is labelled with the teacher's deterministic action, added to the data set (frames kept
 as uint8), and the student is regressed on all of it (``updates`` Adam steps of mean squared
 action error on batches of ``batch_size``, every frame shifted by up to ``shift`` pixels at
-random, as DrQ, plus ``locate_weight`` times the error of the encoder's read-out of the cube's
-position: privileged state that trains the encoder and never reaches the acting policy). After each iteration the deterministic student plays ``eval_episodes``
+random, as DrQ, plus ``locate_weight`` times the error of the encoder's read-out of the achieved goal, the
+cubes' positions: privileged state that trains the encoder and never reaches the acting
+policy). After each iteration the deterministic student plays ``eval_episodes``
 episodes on seeds from VALIDATION_SEED (the curve); at the end 100 from EVAL_SEED (the result).
 
 A run folder holds run.json (settings, seconds), evaluations.csv, model.zip (``save_policy``:
@@ -44,13 +46,16 @@ import numpy as np
 
 from .evaluate import EVAL_SEED, VALIDATION_SEED, load_model, success_rate
 from .progress import note
+from .results import RESULTS, method
 
-PROPRIOCEPTION = ("pad.position", "pad.velocity")
-"""The fields of the state ``observation`` that the student sees: the pad's own state."""
+PROPRIOCEPTION = ("pad.position", "pad.velocity", "holding")
+"""The fields of the state ``observation`` that the student sees, those that the task has: the
+pad's own state (position, velocity, and the grip's holding flag)."""
 ALGO = "distill"
 CUBE_SCALE = 0.15
 """m: the cube positions that the encoder's auxiliary read-out learns are divided by this
-(the half width of where cubes start and goals lie), so that they span about [-1, 1]."""
+(the half width of where Push's cubes start and goals lie), so that they span about [-1, 1]
+(Throw's bin, 0.5-0.65 m out, reads about 4)."""
 
 
 def observation_kwargs(size: int) -> dict:
@@ -59,55 +64,75 @@ def observation_kwargs(size: int) -> dict:
     return {"obs_mode": "state+pixels", "width": size, "height": size}
 
 
-def proprioception_index(env_id: str) -> np.ndarray:
-    """The entries of ``env_id``'s ``observation`` vector that hold PROPRIOCEPTION, (k,) int."""
+def proprioception_fields(env_id: str) -> list[str]:
+    """The fields of PROPRIOCEPTION that ``env_id``'s observation has, in that order."""
     env: Any = gym.make(env_id).unwrapped
-    layout = env.task.observation_layout
-    return np.concatenate([np.arange(layout.slices[name].start, layout.slices[name].stop)
-                           for name in PROPRIOCEPTION])
+    return [name for name in PROPRIOCEPTION if name in env.task.observation_layout.slices]
+
+
+def proprioception_index(env_id: str) -> np.ndarray:
+    """The entries of ``env_id``'s ``observation`` vector that hold PROPRIOCEPTION, (k,) int
+    (Push: 6, the pad's position and velocity; Stack, Throw: 7, and the holding flag)."""
+    env: Any = gym.make(env_id).unwrapped
+    return env.task.observation_layout.entries(proprioception_fields(env_id))
 
 
 def student_inputs(obs: dict, index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """What the student sees of a (batched or single) state+pixels observation: the frames
-    (..., H, W, 3) uint8 and the vector (..., 3 + k) float32, the desired goal then the
-    observation's entries ``index`` (the pad's position and velocity). Nothing of the cube."""
+    (..., H, W, 3) uint8 and the vector (..., g + k) float32, the desired goal (g) then the
+    observation's entries ``index`` (the pad's state, ``proprioception_index``). Nothing of
+    the cubes."""
     vector = np.concatenate([obs["desired_goal"], obs["observation"][..., index]], axis=-1)
     return np.asarray(obs["pixels"], dtype=np.uint8), vector.astype(np.float32)
 
 
+def encoder_layers(size: int, channels: int, features: int):
+    """(conv, project): four 3x3 convolutions of ``channels`` (strides 2, 2, 2, 1; a 64 x 64
+    frame leaves 5 x 5, a 48 x 48 one 3 x 3) and a linear layer to ``features`` with LayerNorm
+    and tanh (DrQ's encoder, strided). ``encode`` applies them to frames (B, H, W, 3)."""
+    import torch
+    from torch import nn
+
+    conv = nn.Sequential(
+        nn.Conv2d(3, channels, 3, stride=2), nn.ReLU(),
+        nn.Conv2d(channels, channels, 3, stride=2), nn.ReLU(),
+        nn.Conv2d(channels, channels, 3, stride=2), nn.ReLU(),
+        nn.Conv2d(channels, channels, 3, stride=1), nn.ReLU(), nn.Flatten())
+    with torch.no_grad():
+        flat = conv(torch.zeros(1, 3, size, size)).shape[1]
+    return conv, nn.Sequential(nn.Linear(flat, features), nn.LayerNorm(features), nn.Tanh())
+
+
+def encode(conv, project, frames):
+    """Features (B, features) of frames (B, H, W, 3) uint8 values as float: scaled to
+    [-0.5, 0.5], then ``encoder_layers``' conv and project."""
+    return project(conv(frames.permute(0, 3, 1, 2) / 255.0 - 0.5))
+
+
 def make_network(size: int, vector_size: int, action_size: int, channels: int = 32,
                  features: int = 64, hidden: int = 256, located: int = 3):
-    """The student: four 3x3 convolutions of ``channels`` (strides 2, 2, 2, 1) on the frame
-    scaled to [-0.5, 0.5], a linear layer to ``features`` with LayerNorm and tanh (DrQ's
-    encoder, strided so that a 64 x 64 frame leaves 5 x 5), concatenated with the vector,
-    then an MLP of two ``hidden`` ReLU layers to tanh actions. Input: frames (B, H, W, 3)
-    uint8 as float, vector (B, vector_size); output (B, action_size) in [-1, 1].
-    ``locate(frames)``: a linear read-out of the features to ``located`` numbers (the cube's
-    position, scaled), trained beside the actions so that the encoder learns where the cube
-    is (an auxiliary loss on privileged state, training only; acting never calls it)."""
+    """The student: ``encoder_layers`` on the frame, its features concatenated with the
+    vector, then an MLP of two ``hidden`` ReLU layers to tanh actions. Input: frames
+    (B, H, W, 3) uint8 as float, vector (B, vector_size); output (B, action_size) in [-1, 1].
+    ``locator``: a linear read-out of the features to ``located`` numbers (the cubes'
+    positions, scaled), trained beside the actions so that the encoder learns where the cube
+    is (an auxiliary loss on privileged state, training only; acting never calls it);
+    ``located`` 0: none (a policy trained without it, ``pixel_sac``)."""
     import torch
     from torch import nn
 
     class Student(nn.Module):
         def __init__(self):
             super().__init__()
-            self.conv = nn.Sequential(
-                nn.Conv2d(3, channels, 3, stride=2), nn.ReLU(),
-                nn.Conv2d(channels, channels, 3, stride=2), nn.ReLU(),
-                nn.Conv2d(channels, channels, 3, stride=2), nn.ReLU(),
-                nn.Conv2d(channels, channels, 3, stride=1), nn.ReLU(), nn.Flatten())
-            with torch.no_grad():
-                flat = self.conv(torch.zeros(1, 3, size, size)).shape[1]
-            self.project = nn.Sequential(nn.Linear(flat, features), nn.LayerNorm(features),
-                                         nn.Tanh())
+            self.conv, self.project = encoder_layers(size, channels, features)
             self.head = nn.Sequential(nn.Linear(features + vector_size, hidden), nn.ReLU(),
                                       nn.Linear(hidden, hidden), nn.ReLU(),
                                       nn.Linear(hidden, action_size), nn.Tanh())
-
-            self.locator = nn.Linear(features, located)
+            if located:
+                self.locator = nn.Linear(features, located)
 
         def encode(self, frames):
-            return self.project(self.conv(frames.permute(0, 3, 1, 2) / 255.0 - 0.5))
+            return encode(self.conv, self.project, frames)
 
         def forward(self, frames, vector):
             return self.head(torch.cat([self.encode(frames), vector], dim=1))
@@ -134,9 +159,10 @@ def random_shift(frames, shift: int, generator):
 
 
 class DistilledPolicy:
-    """A saved student as ``rigid-gym evaluate`` and ``record`` use a model: ``load(path,
-    env)`` and ``predict(obs, deterministic)`` on a state+pixels observation of the size it
-    was trained on (``student_inputs`` keeps the frame, goal and pad state)."""
+    """A saved student (or pixel SAC policy, ``pixel_sac``, saved in the student's form) as
+    ``rigid-gym evaluate`` and ``record`` use a model: ``load(path, env)`` and
+    ``predict(obs, deterministic)`` on a state+pixels observation of the size it was trained
+    on (``student_inputs`` keeps the frame, goal and pad state)."""
 
     def __init__(self, network, config: dict):
         self.network, self.config = network, config
@@ -176,14 +202,15 @@ class DistilledPolicy:
         return (action[0] if single else action), None
 
 
-def save_policy(path: Path, network, config: dict) -> None:
-    """model.zip: ``data`` (the config, algo "distill") and ``policy.pth`` (the weights)."""
+def save_policy(path: Path, network, config: dict, algo: str = ALGO) -> None:
+    """model.zip: ``data`` (the config and ``algo``, "distill" or the pixel SAC's "drq") and
+    ``policy.pth`` (the weights of a ``make_network``)."""
     import torch
 
     buffer = io.BytesIO()
     torch.save(network.state_dict(), buffer)
     with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as archive:
-        archive.writestr("data", json.dumps({"algo": ALGO, **config}))
+        archive.writestr("data", json.dumps({"algo": algo, **config}))
         archive.writestr("policy.pth", buffer.getvalue())
 
 
@@ -227,7 +254,6 @@ def select_student(folder: Path, curve: list[dict], iterations: int):
 def teacher_seconds(teacher: Path) -> tuple[float, float]:
     """(wall, CPU) seconds of the teacher's training: its result file in agents/results
     (``<run_name>.json`` of the run named by the model's settings), else its json's."""
-    from .results import RESULTS
     from .train import run_name
 
     meta = json.loads(teacher.with_suffix(".json").read_text())
@@ -247,7 +273,7 @@ def train_distill(env_id: str, settings: dict, *, seed: int, folder: Path, resum
     it. The run's clock starts at the teacher's training seconds. Returns ``folder``."""
     import torch
 
-    from .train import Clock, machine
+    from .train import Clock
 
     recipe = dict(settings["distill"])
     teacher_path = Path(teacher or recipe["teacher"])
@@ -262,9 +288,13 @@ def train_distill(env_id: str, settings: dict, *, seed: int, folder: Path, resum
     state_path = checkpoints / "latest.pt"
     index = proprioception_index(env_id)
     probe = gym.make(env_id)
-    config = {"env_id": env_id, "size": size, "vector_size": 3 + len(index),
+    goal_size = probe.observation_space["desired_goal"].shape[0]  # type: ignore[index]
+    # the read-out learns the achieved goal (the cubes' positions); Push's 3 is the default
+    network_kwargs = {**recipe.get("network", {}),
+                      **({"located": goal_size} if goal_size != 3 else {})}
+    config = {"env_id": env_id, "size": size, "vector_size": goal_size + len(index),
               "action_size": int(np.prod(probe.action_space.shape or (1,))),
-              "proprioception_index": index.tolist(), "network": recipe.get("network", {})}
+              "proprioception_index": index.tolist(), "network": network_kwargs}
     network = make_network(config["size"], config["vector_size"], config["action_size"],
                            **config["network"])
     optimizer = torch.optim.Adam(network.parameters(), lr=recipe["learning_rate"])
@@ -301,15 +331,18 @@ def train_distill(env_id: str, settings: dict, *, seed: int, folder: Path, resum
                   "teacher_cpu_seconds": cpu, "iterations": iterations, "n_envs": n_envs,
                   "recipe": recipe, "command": " ".join(sys.argv),
                   "student_inputs": {"pixels": [size, size, 3],
-                                     "vector": ["desired_goal", *PROPRIOCEPTION]}}
+                                     "vector": ["desired_goal",
+                                                *proprioception_fields(env_id)]}}
         (folder / "run.json").write_text(json.dumps(record, indent=2))
         with open(folder / "evaluations.csv", "w", newline="") as f:
             csv.writer(f).writerow(["timesteps", "success_rate", "mean_return", "wall_seconds"])
     teacher_model = load_model(teacher_path, probe)
+    teacher_method = method(json.loads(teacher_path.with_suffix(".json").read_text()))
     student = DistilledPolicy(network, config)
 
-    chunks = [np.load(path) for path in sorted(checkpoints.glob("data_*.npz"),
-                                               key=lambda p: int(p.stem.split("_")[1]))]
+    # the iterations that latest.pt counts (a data file of a later one, written before a stop
+    # cut its checkpoint short, is played again)
+    chunks = [np.load(checkpoints / f"data_{i}.npz") for i in range(done_iterations)]
     frames = [c["frames"] for c in chunks]
     vectors = [c["vectors"] for c in chunks]
     labels = [c["labels"] for c in chunks]
@@ -325,13 +358,13 @@ def train_distill(env_id: str, settings: dict, *, seed: int, folder: Path, resum
         new_f = np.empty((steps, n_envs, size, size, 3), np.uint8)
         new_v = np.empty((steps, n_envs, config["vector_size"]), np.float32)
         new_l = np.empty((steps, n_envs, config["action_size"]), np.float32)
-        new_c = np.empty((steps, n_envs, 3), np.float32)
+        new_c = np.empty((steps, n_envs, goal_size), np.float32)
         network.eval()
         for t in range(steps):
             new_f[t], new_v[t] = student_inputs(obs, index)
             state_obs = {k: obs[k] for k in ("observation", "achieved_goal", "desired_goal")}
             new_l[t] = teacher_model.predict(state_obs, deterministic=True)[0]
-            new_c[t] = obs["achieved_goal"][:, :3] / CUBE_SCALE
+            new_c[t] = obs["achieved_goal"] / CUBE_SCALE
             action = new_l[t].copy()
             own = rng.random(n_envs) >= beta
             if own.any():
@@ -341,7 +374,7 @@ def train_distill(env_id: str, settings: dict, *, seed: int, folder: Path, resum
         chunk = {"frames": new_f.reshape(-1, size, size, 3),
                  "vectors": new_v.reshape(-1, config["vector_size"]),
                  "labels": new_l.reshape(-1, config["action_size"]),
-                 "cubes": new_c.reshape(-1, 3)}
+                 "cubes": new_c.reshape(-1, goal_size)}
         frames.append(chunk["frames"])
         vectors.append(chunk["vectors"])
         labels.append(chunk["labels"])
@@ -391,26 +424,43 @@ def train_distill(env_id: str, settings: dict, *, seed: int, folder: Path, resum
     record.update(clock.seconds())
     (folder / "run.json").write_text(json.dumps(record, indent=2))
     if final_episodes:
-        env = gym.make(env_id, **observation_kwargs(size))
-        chosen, selected = select_student(folder, curve, iterations)
-        note(f"{env_id}: final evaluation, {final_episodes} episodes (the student of "
-             f"{selected:,} env steps)", progress)
-        final = success_rate(chosen, env, final_episodes, EVAL_SEED, progress=progress)
-        seconds = clock.seconds()
-        curve = curve + [{"env_steps": env_steps, "wall_s": round(seconds["wall_seconds"], 1),
-                          "success": final["success_rate"]}]
-        result = {
-            "env_id": env_id, "algo": ALGO, "seed": seed, "env_steps": env_steps,
-            "wall_s": seconds["wall_seconds"], "cpu_s": seconds["cpu_seconds"],
-            "episodes": final_episodes, "success": final["success_rate"],
-            "selected_env_steps": selected, "curve": curve, "learner": "torch",
-            "method": f"pixels {size}x{size}: DAgger student of the SAC + HER state policy",
-            "demo_env_steps": 0, "machine": machine(), "obs_mode": "pixels",
+        finish_pixels(folder, curve, clock, final_episodes, results, progress, {
+            "algo": ALGO, "seed": seed, "env_steps": env_steps,
+            "method": f"pixels {size}x{size}: DAgger student of the {teacher_method} state "
+                      "policy",
             "teacher_wall_s": record["teacher_wall_seconds"],
-            "teacher_cpu_s": record["teacher_cpu_seconds"]}
-        text = json.dumps(result, indent=1) + "\n"
-        (folder / "result.json").write_text(text)
-        if results is not None:
-            Path(results).mkdir(parents=True, exist_ok=True)
-            (Path(results) / f"{folder.name}.json").write_text(text)
+            "teacher_cpu_s": record["teacher_cpu_seconds"]})
     return folder
+
+
+def finish_pixels(folder: Path, curve: list[dict], clock, episodes: int,
+                  results: str | Path | None, progress: bool, fields: dict) -> dict:
+    """A pixel run's result: its policy chosen on validation (``select_student`` among the
+    ``checkpoints/student_<k>.zip`` of its curve's points), ``episodes`` episodes from
+    EVAL_SEED, the result (train.RESULT_KEYS, "obs_mode": "pixels", ``fields``: algo, seed,
+    env_steps, method and any others) written to ``result.json`` and into ``results``.
+    ``clock``: the run's (train.Clock); the evaluation counts in its seconds."""
+    from .train import machine
+
+    record = json.loads((folder / "run.json").read_text())
+    env_id, size = record["env_id"], record["env_kwargs"]["width"]
+    chosen, selected = select_student(folder, curve, len(curve))
+    note(f"{env_id}: final evaluation, {episodes} episodes (the policy of {selected:,} env "
+         "steps)", progress)
+    final = success_rate(chosen, gym.make(env_id, **observation_kwargs(size)), episodes,
+                         EVAL_SEED, progress=progress)
+    seconds = clock.seconds()
+    result = {
+        "env_id": env_id, **fields, "wall_s": seconds["wall_seconds"],
+        "cpu_s": seconds["cpu_seconds"], "episodes": episodes,
+        "success": final["success_rate"], "selected_env_steps": selected,
+        "curve": curve + [{"env_steps": fields["env_steps"],
+                           "wall_s": round(seconds["wall_seconds"], 1),
+                           "success": final["success_rate"]}],
+        "learner": "torch", "demo_env_steps": 0, "machine": machine(), "obs_mode": "pixels"}
+    text = json.dumps(result, indent=1) + "\n"
+    (folder / "result.json").write_text(text)
+    if results is not None:
+        Path(results).mkdir(parents=True, exist_ok=True)
+        (Path(results) / f"{folder.name}.json").write_text(text)
+    return result

@@ -26,7 +26,7 @@ import numpy as np
 import rigid_gym  # noqa: F401  (registers the env ids)
 from rigid_gym.checks import BadFile
 
-from .algorithms import algorithm_of, find_algorithm
+from .algorithms import PIXEL_ALGORITHMS, algorithm_of, find_algorithm
 from .progress import bar
 
 EVAL_SEED = 1_000_000
@@ -155,7 +155,7 @@ def commit_model(run: str | Path, name: str, episodes: int = 100) -> dict:
     meta = json.loads((run / "run.json").read_text())
     source = run / "selected_model.zip"
     source = source if source.is_file() else run / "model.zip"
-    if meta.get("algo") == "distill":  # a pixel student's zip holds its weights alone
+    if meta.get("algo") in PIXEL_ALGORITHMS:  # a pixel policy's zip holds its weights alone
         shutil.copy2(source, MODELS / f"{name}.zip")
         return finish_commit(run, name, meta, source, episodes)
     model = load_model(source, gym.make(meta["env_id"]), meta.get("algo"))

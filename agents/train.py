@@ -47,6 +47,7 @@ import time
 import warnings
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -57,7 +58,7 @@ from stable_baselines3.common.vec_env import VecCheckNan, VecMonitor
 import rigid_gym  # noqa: F401  (registers the env ids)
 from rigid_gym.checks import integer
 
-from .algorithms import algorithm_class, learner_for
+from .algorithms import PIXEL_ALGORITHMS, algorithm_class, learner_for
 from .evaluate import VALIDATION_SEED, load_model, success_rate
 from .progress import note
 from .vec_env import SB3VecEnv
@@ -180,21 +181,23 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     progress: say on standard error what the run is doing (making the envs and the model,
     the demonstrations and each evaluation with a bar of their episodes); the training
     steps' own bar is ``progress_bar`` (SB3's).
-    obs_mode: "state", or "pixels": the pixel recipe (algo ``distill``,
+    obs_mode: "state", or "pixels": a pixel recipe, algo ``distill`` (the default,
     ``rigid_gym.agents.distill``: a student on the frame, the goal and the pad's own state,
-    taught by the state policy ``teacher``, default the recipe's); ``timesteps`` then sets
-    its iterations (whole iterations of the recipe's episodes), ``overrides`` replace the
-    recipe's settings, ``resume`` is any true value (it goes on from checkpoints/latest.pt).
+    taught by the state policy ``teacher``, default the recipe's; ``timesteps`` then sets
+    its iterations, whole iterations of the recipe's episodes) or ``drq``
+    (``rigid_gym.agents.pixel_sac``: SAC + HER on the same inputs, no privileged state);
+    ``overrides`` replace the recipe's settings, ``resume`` is any true value (it goes on
+    from checkpoints/latest.pt).
     """
     import torch
 
     if obs_mode not in ("state", "pixels"):
         raise ValueError(f"train: obs_mode must be 'state' or 'pixels', got {obs_mode!r}")
-    if obs_mode == "pixels" or algo == "distill":
-        if algo not in (None, "distill") or obs_mode != "pixels":
-            raise ValueError("train: the pixel recipe is algo 'distill' with obs_mode 'pixels' "
-                             f"(got algo {algo!r}, obs_mode {obs_mode!r})")
-        return train_pixels(env_id, timesteps=timesteps, seed=seed, out=out,
+    if obs_mode == "pixels" or algo in PIXEL_ALGORITHMS:
+        if algo not in (None, *PIXEL_ALGORITHMS) or obs_mode != "pixels":
+            raise ValueError(f"train: the pixel recipes are algos {PIXEL_ALGORITHMS} with "
+                             f"obs_mode 'pixels' (got algo {algo!r}, obs_mode {obs_mode!r})")
+        return train_pixels(env_id, algo or "distill", timesteps=timesteps, seed=seed, out=out,
                             eval_episodes=eval_episodes, threads=threads, overrides=overrides,
                             resume=resume is not None and resume is not False,
                             final_episodes=final_episodes, results=results, teacher=teacher,
@@ -275,36 +278,47 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     return folder
 
 
-def train_pixels(env_id: str, *, timesteps: int | None, seed: int, out: str | Path,
-                 eval_episodes: int, threads: int, overrides: dict | None, resume: bool,
-                 final_episodes: int, results: str | Path | None, teacher: str | None,
-                 progress: bool) -> Path:
-    """``train``'s pixel recipe (``rigid_gym.agents.distill.train_distill``) with the entry's
-    ``distill`` settings, ``overrides`` replacing them; ``timesteps``: env steps, rounded up
-    to whole iterations."""
+def train_pixels(env_id: str, algo: str, *, timesteps: int | None, seed: int,
+                 out: str | Path, eval_episodes: int, threads: int, overrides: dict | None,
+                 resume: bool, final_episodes: int, results: str | Path | None,
+                 teacher: str | None, progress: bool) -> Path:
+    """``train``'s pixel recipe ``algo`` (distill: ``rigid_gym.agents.distill.train_distill``;
+    drq: ``rigid_gym.agents.pixel_sac.train_pixel_sac``) with the entry's settings under
+    ``algos: {algo: {algo: ...}}``, ``overrides`` replacing them; ``timesteps``: env steps,
+    rounded up to whole iterations (distill) or whole episodes of the envs (drq)."""
     import torch
 
-    from .distill import ALGO, train_distill
+    settings = load_hyperparams(env_id, algo)
+    if algo not in settings:
+        raise ValueError(f"train: {env_id} has no pixel recipe {algo!r} (algos: {{{algo}: "
+                         f"{{{algo}: ...}}}}) in {HYPERPARAMS.name}")
+    if teacher is not None and algo != "distill":
+        raise ValueError(f"train: a teacher teaches the distill recipe only, not {algo!r}")
+    recipe = {**settings[algo], **(overrides or {})}
+    if timesteps is not None:
+        timesteps = _count(timesteps, "timesteps", 1)
+    torch.set_num_threads(_count(threads, "threads", 1))
+    folder = run_directory(out, env_id, algo, _count(seed, "seed", 0))
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "result.json").unlink(missing_ok=True)  # a result only once the run finished
+    common: dict[str, Any] = {
+        "seed": seed, "folder": folder, "resume": resume, "results": results,
+        "eval_episodes": _count(eval_episodes, "eval_episodes", 0),
+        "final_episodes": _count(final_episodes, "final_episodes", 0), "progress": progress}
+    if algo == "drq":
+        from .pixel_sac import train_pixel_sac
 
-    settings = load_hyperparams(env_id, ALGO)
-    if "distill" not in settings:
-        raise ValueError(f"train: {env_id} has no pixel recipe (algos: distill) in "
-                         f"{HYPERPARAMS.name}")
-    recipe = {**settings["distill"], **(overrides or {})}
+        return train_pixel_sac(env_id, {**settings, algo: recipe}, timesteps=timesteps,
+                               **common)
+    from .distill import train_distill
+
     iterations = None
     if timesteps is not None:
         per_iteration = -(-recipe["episodes"] // recipe["n_envs"]) * recipe["n_envs"] \
             * gym.spec(env_id).max_episode_steps
-        iterations = -(-_count(timesteps, "timesteps", 1) // per_iteration)
-    torch.set_num_threads(_count(threads, "threads", 1))
-    folder = run_directory(out, env_id, ALGO, _count(seed, "seed", 0))
-    folder.mkdir(parents=True, exist_ok=True)
-    (folder / "result.json").unlink(missing_ok=True)  # a result only once the run finished
-    return train_distill(env_id, {**settings, "distill": recipe}, seed=seed, folder=folder,
-                         resume=resume, teacher=teacher, iterations=iterations,
-                         eval_episodes=_count(eval_episodes, "eval_episodes", 0),
-                         final_episodes=_count(final_episodes, "final_episodes", 0),
-                         results=results, progress=progress)
+        iterations = -(-timesteps // per_iteration)
+    return train_distill(env_id, {**settings, algo: recipe}, teacher=teacher,
+                         iterations=iterations, **common)
 
 
 def finish(folder: Path, model, clock: Clock, episodes: int = 100,

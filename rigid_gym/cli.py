@@ -167,7 +167,8 @@ def train(args) -> int:
     resume = None
     if args.resume and args.obs_mode == "pixels":
         # the pixel recipe goes on from its run folder's checkpoints/latest.pt
-        resume = run_directory(args.out, args.env_id, "distill", args.seed) / "checkpoints"
+        resume = run_directory(args.out, args.env_id, args.algo or "distill",
+                               args.seed) / "checkpoints"
     elif args.resume:
         folder = run_directory(args.out, args.env_id,
                                args.algo or load_hyperparams(args.env_id)["algo"], args.seed)
@@ -405,12 +406,14 @@ def build_parser() -> argparse.ArgumentParser:
     p = commands.add_parser("train", help="train a stable-baselines3 baseline on an env")
     p.add_argument("env_id", type=env_id, help="e.g. rigid_gym/Push-v0")
     p.add_argument("--obs-mode", choices=("state", "pixels"), default="state",
-                   help="pixels: the pixel recipe (algo distill: a student on the frame, goal "
-                   "and pad state, taught on its own states by a state policy)")
+                   help="pixels: a pixel recipe, on the frame, goal and pad state (algo "
+                   "distill, the default: a student taught on its own states by a state "
+                   "policy; drq: SAC + HER with random shifts, no privileged state)")
     p.add_argument("--teacher", metavar="MODEL", default=None,
                    help="with --obs-mode pixels: the state policy that labels the student's "
                    "states (default hyperparams.yml's)")
-    p.add_argument("--algo", choices=("sac", "tqc", "ppo", "bc_sac", "distill"), default=None,
+    p.add_argument("--algo", choices=("sac", "tqc", "ppo", "bc_sac", "distill", "drq"),
+                   default=None,
                    help="default: the env's entry in agents/hyperparams.yml (another recipe of "
                         "the entry's `algos` brings its settings)")
     p.add_argument("--learner", choices=("auto", "sbx", "sb3", "batch"), default="auto",

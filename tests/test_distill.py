@@ -20,39 +20,43 @@ from rigid_gym.agents.train import RESULT_KEYS, train
 from rigid_gym.cli import main
 
 PUSH = "rigid_gym/Push-v0"
+STACK = "rigid_gym/Stack-v0"
 TINY = {"n_envs": 2, "episodes": 2, "updates": 3, "batch_size": 8, "beta_iterations": 2,
         "network": {"channels": 4}}
 """A recipe of one 100-step iteration and three updates: the loop, not the learning."""
 
 
-def student(size=64):
-    index = proprioception_index(PUSH)
-    config = {"size": size, "vector_size": 3 + len(index), "action_size": 3,
+def student(env_id=PUSH, size=64):
+    index = proprioception_index(env_id)
+    goal = gym.make(env_id).observation_space["desired_goal"].shape[0]
+    config = {"size": size, "vector_size": goal + len(index), "action_size": 3,
               "proprioception_index": index.tolist(), "network": {"channels": 4}}
     torch.manual_seed(0)
     return DistilledPolicy(make_network(size, config["vector_size"], 3, channels=4), config)
 
 
-def test_the_student_sees_the_frame_the_goal_and_the_pad_never_the_cube():
-    env = gym.make(PUSH, **observation_kwargs(64))
+@pytest.mark.parametrize("env_id, pad", [(PUSH, ("pad.position", "pad.velocity")),
+                                         (STACK, ("pad.position", "pad.velocity", "holding"))])
+def test_the_student_sees_the_frame_the_goal_and_the_pad_never_the_cube(env_id, pad):
+    env = gym.make(env_id, **observation_kwargs(64))
     obs, _ = env.reset(seed=3)
     layout = env.unwrapped.task.observation_layout
-    index = proprioception_index(PUSH)
-    assert sorted(index.tolist()) == list(range(layout.slices["pad.position"].start,
-                                                layout.slices["pad.velocity"].stop))
+    index = proprioception_index(env_id)
+    assert index.tolist() == layout.entries(pad).tolist()
     frames, vector = student_inputs(obs, index)
     assert frames.shape == (64, 64, 3) and frames.dtype == np.uint8
     np.testing.assert_array_equal(vector, np.concatenate(
-        [obs["desired_goal"], obs["observation"][layout.slices["pad.position"]],
-         obs["observation"][layout.slices["pad.velocity"]]]).astype(np.float32))
-    policy = student()
+        [obs["desired_goal"], *(obs["observation"][layout.slices[name]] for name in pad)]
+    ).astype(np.float32))
+    policy = student(env_id)
     action = policy.predict(obs)[0]
-    # every entry of the cube's state, and the achieved goal (its position), changed: the
+    # every entry of the cubes' state, and the achieved goal (their positions), changed: the
     # action is the same bit for bit
     hidden = dict(obs, achieved_goal=obs["achieved_goal"] + 0.1,
                   observation=obs["observation"].copy())
-    for name in ("cube0.position", "cube0.offset", "cube0.orientation", "cube0.velocity",
-                 "cube0.angular_velocity"):
+    cubes = [name for name in layout.slices if name.startswith("cube")]
+    assert len(cubes) == 5 * env.unwrapped.task.num_cubes
+    for name in cubes:
         hidden["observation"][layout.slices[name]] += 0.37
     np.testing.assert_array_equal(policy.predict(hidden)[0], action)
     # what it does see moves it: the frame, the goal, the pad
@@ -89,6 +93,8 @@ def test_the_pixel_recipe_trains_resumes_evaluates_and_records(tmp_path, capsys)
     first = json.loads((folder / "run.json").read_text())
     assert first["obs_mode"] == "pixels" and first["wall_seconds"] > first[
         "teacher_wall_seconds"] > 0
+    # a data file of an iteration that latest.pt does not count (a stop while it was written)
+    (folder / "checkpoints" / "data_1.npz").write_bytes(b"cut short")
     # goes on to a second iteration from the checkpoint, the curve kept
     folder = train(PUSH, obs_mode="pixels", timesteps=200, out=out, eval_episodes=2,
                    overrides=TINY, final_episodes=2, results=results, resume=folder / "checkpoints")
@@ -113,9 +119,25 @@ def test_the_pixel_recipe_trains_resumes_evaluates_and_records(tmp_path, capsys)
 
 
 def test_the_pixel_recipe_is_distill_and_resumes_only_from_a_checkpoint(tmp_path):
-    with pytest.raises(ValueError, match="the pixel recipe is algo 'distill'"):
+    with pytest.raises(ValueError, match=r"the pixel recipes are algos \('distill', 'drq'\)"):
         train(PUSH, obs_mode="pixels", algo="sac", out=tmp_path)
+    with pytest.raises(ValueError, match="a teacher teaches the distill recipe only"):
+        train(PUSH, obs_mode="pixels", algo="drq", out=tmp_path, teacher="x.zip")
     with pytest.raises(ValueError, match="obs_mode must be 'state' or 'pixels'"):
         train(PUSH, obs_mode="rgb", out=tmp_path)
     with pytest.raises(ValueError, match="--resume: no checkpoint"):
         train(PUSH, obs_mode="pixels", out=tmp_path, overrides=TINY, resume=tmp_path / "x")
+
+
+def test_a_stack_student_reads_out_both_cubes_and_sees_the_grip(tmp_path):
+    pytest.importorskip("sbx", reason="the committed Stack teacher is an SBX model")
+    folder = train(STACK, obs_mode="pixels", timesteps=1, out=tmp_path, eval_episodes=0,
+                   overrides={**TINY, "updates": 1}, final_episodes=0)
+    data = np.load(folder / "checkpoints" / "data_0.npz")
+    # 2 episodes of 100 steps; the goal (6) and the pad's position, velocity and grip (7)
+    assert data["vectors"].shape == (200, 13) and data["cubes"].shape == (200, 6)
+    # the read-out learns both cubes: the achieved goal, scaled
+    policy = DistilledPolicy.load(folder / "model.zip")
+    assert policy.network.locator.out_features == 6
+    assert json.loads((folder / "run.json").read_text())["student_inputs"]["vector"] == [
+        "desired_goal", "pad.position", "pad.velocity", "holding"]
