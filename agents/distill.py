@@ -232,6 +232,20 @@ def vector_success(policy, env_id: str, size: int, episodes: int, seed: int) -> 
     return float(success.mean())
 
 
+def validate(policy, env_id: str, size: int, episodes: int, clock, env_steps: int,
+             curve: list[dict], folder: Path) -> tuple[float, dict]:
+    """Score ``policy`` on ``episodes`` validation episodes (NaN for none), add the point to
+    ``curve`` and to ``folder``/evaluations.csv -> (its success rate, ``clock.seconds()``)."""
+    rate = vector_success(policy, env_id, size, episodes, VALIDATION_SEED) \
+        if episodes else float("nan")
+    seconds = clock.seconds()
+    curve.append({"env_steps": env_steps, "wall_s": round(seconds["wall_seconds"], 1),
+                  "success": rate})
+    with open(folder / "evaluations.csv", "a", newline="") as f:
+        csv.writer(f).writerow([env_steps, rate, "", seconds["wall_seconds"]])
+    return rate, seconds
+
+
 def select_student(folder: Path, curve: list[dict], iterations: int):
     """The run's student, as ``train.finish`` chooses a checkpoint: among the students of the
     iterations of the run's second half (``checkpoints/student_<i>.zip``, i >= SELECT_FROM *
@@ -399,13 +413,8 @@ def train_distill(env_id: str, settings: dict, *, seed: int, folder: Path, resum
             optimizer.step()
             loss_sum += loss.item()
         network.eval()
-        rate = vector_success(student, env_id, size, eval_episodes, VALIDATION_SEED) \
-            if eval_episodes else float("nan")
-        seconds = clock.seconds()
-        curve.append({"env_steps": env_steps, "wall_s": round(seconds["wall_seconds"], 1),
-                      "success": rate})
-        with open(folder / "evaluations.csv", "a", newline="") as f:
-            csv.writer(f).writerow([env_steps, rate, "", seconds["wall_seconds"]])
+        rate, seconds = validate(student, env_id, size, eval_episodes, clock, env_steps, curve,
+                                 folder)
         note(f"{env_id}: iteration {iteration + 1}: {len(all_l):,} labelled states, loss "
              f"{loss_sum / recipe['updates']:.4f}, validation success {rate:.0%}, "
              f"{seconds['wall_seconds'] / 60:.1f} min", progress)

@@ -62,9 +62,8 @@ from .distill import (
     random_shift,
     save_policy,
     student_inputs,
-    vector_success,
+    validate,
 )
-from .evaluate import VALIDATION_SEED
 from .progress import note
 
 ALGO = "drq"
@@ -345,14 +344,9 @@ def train_pixel_sac(env_id: str, settings: dict, *, seed: int, folder: Path, res
         if rounds % every and rounds != total:
             continue
         policy = acting_policy(critic, actor, config)
-        rate = vector_success(policy, env_id, size, eval_episodes, VALIDATION_SEED) \
-            if eval_episodes else float("nan")
-        seconds = clock.seconds()
         env_steps = rounds * round_size
-        curve.append({"env_steps": env_steps, "wall_s": round(seconds["wall_seconds"], 1),
-                      "success": rate})
-        with open(folder / "evaluations.csv", "a", newline="") as f:
-            csv.writer(f).writerow([env_steps, rate, "", seconds["wall_seconds"]])
+        rate, seconds = validate(policy, env_id, size, eval_episodes, clock, env_steps, curve,
+                                 folder)
         note(f"{env_id}: {env_steps:,} env steps, critic loss "
              f"{np.mean(losses) if losses else float('nan'):.4f}, alpha "
              f"{log_alpha.exp().item():.3f}, validation success {rate:.0%}, "

@@ -444,16 +444,22 @@ def grasp_errors(world: rg.World) -> tuple[float, float]:
 BLOCK_FORCE, BLOCK_SECONDS = 10.0, 0.2  # N on the lower block (sliding needs > 2 mu m g = 5.9 N)
 
 
-def block_on_block_errors(world: rg.World) -> tuple[float, float]:
-    """The lower block pulled along +x by BLOCK_FORCE for BLOCK_SECONDS on a frictionless
-    floor, the upper one sliding on it: |p - F T| / (F T) of the two blocks' momentum (exact
-    whatever the friction between them), and |v_upper / (mu g T) - 1| (it slides at mu g)."""
+def pull_lower_block(world: rg.World) -> tuple[int, float, float]:
+    """Pull the lower block (body 1) along +x by BLOCK_FORCE for BLOCK_SECONDS (whole steps) ->
+    (the steps, the impulse given F T, N s, the two blocks' momentum along x, N s: 1 kg each)."""
     steps = round(BLOCK_SECONDS / world.dt)
     for _ in range(steps):
         world.apply_force(1, (BLOCK_FORCE, 0.0, 0.0))
         world.step()
-    pulled = BLOCK_FORCE * steps * world.dt
-    momentum = float(world.velocity[1, 0] + world.velocity[2, 0])  # 1 kg each
+    return (steps, BLOCK_FORCE * steps * world.dt,
+            float(world.velocity[1, 0] + world.velocity[2, 0]))
+
+
+def block_on_block_errors(world: rg.World) -> tuple[float, float]:
+    """The lower block pulled along +x by BLOCK_FORCE for BLOCK_SECONDS on a frictionless
+    floor, the upper one sliding on it: |p - F T| / (F T) of the two blocks' momentum (exact
+    whatever the friction between them), and |v_upper / (mu g T) - 1| (it slides at mu g)."""
+    steps, pulled, momentum = pull_lower_block(world)
     upper = float(world.velocity[2, 0]) / (scenes.BLOCK_MU * G * steps * world.dt)
     return abs(momentum - pulled) / pulled, abs(upper - 1.0)
 
@@ -467,12 +473,7 @@ def block_sticking_errors(world: rg.World) -> tuple[float, float]:
     """The lower block pulled by BLOCK_FORCE for BLOCK_SECONDS, the cube on it sticking: |p -
     F T| / (F T) of the two blocks' momentum, and |v_cube / (F T / 2 m) - 1| (both move as one
     body of 2 kg)."""
-    steps = round(BLOCK_SECONDS / world.dt)
-    for _ in range(steps):
-        world.apply_force(1, (BLOCK_FORCE, 0.0, 0.0))
-        world.step()
-    pulled = BLOCK_FORCE * steps * world.dt
-    momentum = float(world.velocity[1, 0] + world.velocity[2, 0])  # 1 kg each
+    _, pulled, momentum = pull_lower_block(world)
     return abs(momentum - pulled) / pulled, abs(float(world.velocity[2, 0]) / (pulled / 2) - 1.0)
 
 
