@@ -69,8 +69,10 @@ class TaskBatch:
     can randomise them: the copies of a World share its geometry).
 
     State, every array with the leading copy axis: ``goals`` (B, goal_size) m, ``half``
-    (B, cubes) m the cubes' half edges, ``places`` (B, fixtures, 3) m, ``rngs`` (B,) each
-    copy's generator (None until its first reset); the World, its ``gripper``
+    (B, cubes) m the cubes' half edges, ``places`` (B, fixtures, 3) m, ``released`` (B,)
+    bool whether the pad has let go of an object it held this episode (the shaped reward's
+    memory: Throw pays for the throw, not the hold), ``rngs`` (B,) each copy's generator
+    (None until its first reset); the World, its ``gripper``
     (SuctionGripper) and the body indices ``cubes``, ``fixtures``, ``table``,
     ``gripper_body``.
     """
@@ -84,6 +86,7 @@ class TaskBatch:
         self.goals = np.zeros((b, task.goal_size))
         self.half = np.full((b, task.num_cubes), CUBE_HALF)
         self.places = np.zeros((b, task.num_fixtures, 3))
+        self.released = np.zeros(b, dtype=bool)
         # the goals as observed (float32), and as the goal test reads them (float64 of those)
         self.desired = np.zeros((b, task.goal_size), dtype=np.float32)
         self.desired64 = np.zeros((b, task.goal_size))
@@ -178,6 +181,7 @@ class TaskBatch:
         self.write(copies, rows, starts, places, factors)
         self.half[copies] = half
         self.places[copies] = places
+        self.released[copies] = False
         goals = self.task.sample_goals(rngs, starts, half, places)
         self.goals[copies] = goals
         self.desired[copies] = goals
@@ -218,11 +222,14 @@ class TaskBatch:
 
     def step(self, actions: np.ndarray) -> Outcome:
         """One env step of every copy: ``actions`` (B, action size), checked and clipped to
-        [-1, 1], command the grippers; the solver runs SOLVER_STEPS steps of every world in
-        one call (held objects carried in it); returns every copy's Outcome."""
+        [-1, 1], command the grippers (noting the copies that let go: ``released``); the
+        solver runs SOLVER_STEPS steps of every world in one call (held objects carried in
+        it); returns every copy's Outcome."""
         world, gripper = self.built()
         grips = actions[:, 3] if self.task.has_grip else None
+        holding = gripper.held >= 0
         gripper.command(actions[:, :3], grips)
+        self.released |= holding & (gripper.held < 0)
         world.step(SOLVER_STEPS)
         return self.observe(ALL)
 
@@ -264,7 +271,7 @@ class TaskBatch:
             held = gripper.held[copies] if self.task.has_grip \
                 else np.full(len(worlds), -1, dtype=np.int64)
             rewards = np.where(successes, 1.0, self.task.shaped(
-                clean, held, achieved64, desired64, self.half[copies]))
+                clean, held, achieved64, desired64, self.half[copies], self.released[copies]))
         else:
             rewards = self.task.reward(achieved64, desired64, "dense")
         observations = {"observation": vectors.astype(np.float32), "achieved_goal": achieved,

@@ -47,10 +47,13 @@ class StackEnv(RigidGymEnv):
     goals, so HER can recompute them, also for goals relabelled from where the cubes lay.
     sparse: 0 when reached, else -1; dense: minus the distance between the 6-vectors, m.
     shaped (for on-policy learners; staged as ManiSkill's dense rewards), in [0, 1]: cube 0's
-    stages until it lies within 0.05 m of its target, then 3 + cube 1's; a cube's stages are
-    reach, 1 - tanh(5 d) of the pad's distance to it, until the pad holds it (or it lies within
-    0.05 m of its target: letting go there keeps the stage), then carry, 2 + (1 - tanh(5 d)) of
-    its distance to its target; divided by 6; 1 when reached.
+    stages until it is placed (within 0.05 m of its target and let go of), then 4 + cube 1's;
+    a cube's stages are reach, 1 - tanh(5 d) of the pad's distance to it, until the pad holds
+    it (or it lies within 0.05 m of its target), then carry, 2 + (1 - tanh(5 d)) of its
+    distance to its target; divided by 8; 1 when reached. Placing cube 0 takes the reward
+    from at most 3/8 (holding it at its target) to at least 4/8. Episode returns of
+    hand-written policies (seeds 0-39): the scripted stack 85.2; the same holding cube 1
+    2.5 cm above its target 75.5; carrying cube 0 over its target and holding it 35.5.
 
     ## Starting state
     Cubes at x, y uniform in [-0.15, 0.15] m, at least 0.08 m apart, resting, unrotated; the

@@ -166,11 +166,12 @@ class Task:
         raise NotImplementedError
 
     def shaped(self, vectors: np.ndarray, held: np.ndarray, achieved_goal: np.ndarray,
-               desired_goal: np.ndarray, half: np.ndarray) -> np.ndarray:
+               desired_goal: np.ndarray, half: np.ndarray, released: np.ndarray) -> np.ndarray:
         """The shaped reward of copies whose noise-free observation vectors are ``vectors``
-        (k, layout size): ``shaped_reward`` of the pad's position read from them. A task whose
-        stages read more of the state than the pad and the goals (Flip: the cube's position,
-        which its goal does not hold) overrides this."""
+        (k, layout size) and whose pad has let go of an object it held this episode where
+        ``released`` (k,) bool: ``shaped_reward`` of the pad's position read from them. A task
+        whose stages read more of the state than the pad and the goals (Flip: the cube's
+        position, which its goal does not hold; Throw: ``released``) overrides this."""
         pad = vectors[:, self.observation_layout.slice("pad.position")]
         return self.shaped_reward(pad, held, achieved_goal, desired_goal, half)
 

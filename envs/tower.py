@@ -34,6 +34,10 @@ NUM_CUBES = 3
 CUBES_RANGE = (2, 5)
 """The allowed ``num_cubes``: 2 (Stack's tower) to 5 (a 20 cm tower of 4 cm cubes, within the
 pad's reach with the top cube held under it)."""
+PLACE_STAGE = 4.0
+"""The shaped reward's worth (before its division by 4 n) of each cube placed (let go of at
+its target) below the one being worked on: 1 more than carrying that cube to its target pays
+(3), so that a cube is put down, not held."""
 TALL_VIEW = ((0.45, -0.6, 0.55), (0.0, 0.0, 0.08), 40.0)
 """The rgb_array camera of towers of 4 and 5 (20 cm) cubes: the pixel observations' "front"
 camera, wider than the default, which frames towers of up to 3 anywhere in the range."""
@@ -94,16 +98,18 @@ class Tower(Task):
         n = self.num_cubes
         cubes = achieved_goal.reshape(-1, n, 3)
         targets = desired_goal.reshape(-1, n, 3)
-        placed = distance(cubes - targets) < DISTANCE_THRESHOLD  # (k, n)
-        # the cube being worked on: the first not at its target (the top one when all are)
+        near = distance(cubes - targets) < DISTANCE_THRESHOLD  # (k, n)
+        # placed: at its target and let go of (a cube held there is still being carried)
+        placed = near & (held[:, None] != np.arange(n))
+        # the cube being worked on: the first not placed (the top one when all are)
         current = np.minimum(np.cumprod(placed, axis=1).sum(axis=1), n - 1)
         rows = np.arange(len(cubes))
         cube, target = cubes[rows, current], targets[rows, current]
-        # its stages: reach it, hold it (or it lies at its target), carry it; 3 per cube
-        # below it, all of which lie at their targets
-        carry = staged(closeness(pad - cube), (held == current) | placed[rows, current],
+        # its stages: reach it, hold it (or it lies at its target), carry it, in [0, 3]; 4
+        # per cube below it, all placed: placing a cube pays more than carrying it there
+        carry = staged(closeness(pad - cube), (held == current) | near[rows, current],
                        closeness(cube - target))
-        return (3.0 * current + carry) / (3.0 * n)
+        return (PLACE_STAGE * current + carry) / (PLACE_STAGE * n)
 
 
 TOWERS = {n: Tower(n) for n in range(CUBES_RANGE[0], CUBES_RANGE[1] + 1)}
@@ -151,12 +157,14 @@ class TowerEnv(RigidGymEnv):
     tests read only the goals, so HER can recompute them, also for goals relabelled from where
     the cubes lay. sparse: 0 when reached, else -1; dense: minus the distance between the
     3 n-vectors, m. shaped (for on-policy learners; staged as ManiSkill's dense rewards), in
-    [0, 1]: 3 k + the stages of cube k, where cube k is the first cube not within 0.05 m of its
-    target (the top cube when all are); a cube's stages are reach, 1 - tanh(5 d) of the pad's
-    distance to it, until the pad holds it (or it lies within 0.05 m of its target: letting go
-    there keeps the stage), then carry, 2 + (1 - tanh(5 d)) of its distance to its target;
-    divided by 3 n; 1 when reached. A stage is paid for by where the cubes lie, so a cube put
-    in its place keeps paying after the pad lets go.
+    [0, 1]: 4 k + the stages of cube k, where cube k is the first cube not placed (within
+    0.05 m of its target and not held; the top cube when all are); a cube's stages are reach,
+    1 - tanh(5 d) of the pad's distance to it, until the pad holds it (or it lies within
+    0.05 m of its target), then carry, 2 + (1 - tanh(5 d)) of its distance to its target;
+    divided by 4 n; 1 when reached. Placing pays: letting a cube go at its target takes the
+    reward from at most 3 to at least 4 (plus the next cube's reach), so holding a cube at its
+    target is worth less than putting it down, and a placed cube keeps paying after the pad
+    lets go.
 
     ## Starting state
     Cubes at x, y uniform in [-0.15, 0.15] m, at least 0.08 m apart, resting, unrotated; the

@@ -154,15 +154,19 @@ def test_tower_shaped_reward_pays_cube_by_cube_and_keeps_a_placed_cube():
     goal = tower_goal()
     cubes = np.array([[0.15, 0.0, 0.02, -0.1, 0.1, 0.02, -0.1, -0.1, 0.02]])
     none_placed = task.shaped_reward(np.array([[0.0, 0.0, 0.2]]), NONE, cubes, goal, HALF3)[0]
-    assert 0.0 < none_placed < 1 / 9  # reaching cube 0
+    assert 0.0 < none_placed < 1 / 12  # reaching cube 0
     one = cubes.copy()
     one[0, :3] = goal[0, :3]
     two = one.copy()
     two[0, 3:6] = goal[0, 3:6]
-    # cube 0 placed, the pad gone: cube 1's reach stage, above all of cube 0's stages
+    # cube 0 placed, the pad gone: cube 1's reach stage, above all of cube 0's stages (4 of
+    # the 12 a cube placed, against at most 3 for one held at its target)
     r1 = task.shaped_reward(np.array([[0.0, 0.0, 0.2]]), NONE, one, goal, HALF3)[0]
     r2 = task.shaped_reward(np.array([[0.0, 0.0, 0.2]]), NONE, two, goal, HALF3)[0]
-    assert 3 / 9 < r1 < 4 / 9 and 6 / 9 < r2 < 7 / 9
+    assert 4 / 12 < r1 < 5 / 12 and 8 / 12 < r2 < 9 / 12
+    held_there = task.shaped_reward(goal[:, 3:6] + [0, 0, 0.035], np.array([1]), two, goal,
+                                    HALF3)[0]
+    assert 6 / 12 < held_there <= 7 / 12 < 8 / 12 < r2  # cube 1 held at its target
     # holding cube 2 (index 2) and carrying it nearer its target grows the reward
     carried = []
     for z in (0.2, 0.15, 0.11):
@@ -170,7 +174,7 @@ def test_tower_shaped_reward_pays_cube_by_cube_and_keeps_a_placed_cube():
         achieved[0, 6:] = [goal[0, 6], goal[0, 7], z]
         carried.append(task.shaped_reward(achieved[:, 6:] + [0, 0, 0.035], np.array([2]),
                                           achieved, goal, HALF3)[0])
-    assert 8 / 9 < carried[0] < carried[1] < carried[2] < 1.0
+    assert 10 / 12 < carried[0] < carried[1] < carried[2] < 11 / 12
     rng = np.random.default_rng(0)
     k = 2000
     reward = task.shaped_reward(rng.uniform(-0.5, 0.8, (k, 3)), rng.integers(-1, 3, k),
