@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from rigid_gym.checks import in_range
+
 from .base import RigidGymEnv
 from .tower import Tower
 
@@ -11,8 +13,19 @@ class Stack(Tower):
     reached when both cubes are near their targets and placed as the targets are: the Tower of
     two (``envs/tower.py``), whose draws, goal test and rewards are Stack's."""
 
-    def __init__(self):
-        super().__init__(2)
+    def __init__(self, start_placed: float = 0.0):
+        super().__init__(2, start_placed)
+
+
+STACK = Stack()
+"""The env id's Stack (no episode starts placed), shared (a Task holds no state)."""
+
+
+def stack(start_placed: float) -> Stack:
+    """The Stack whose episodes start with cube 0 placed with chance ``start_placed`` (in
+    [0, 1]), else a ValueError that says so."""
+    chance = in_range(start_placed, 0.0, 1.0, "StackEnv: start_placed")
+    return STACK if chance == 0.0 else Stack(chance)
 
 
 class StackEnv(RigidGymEnv):
@@ -65,7 +78,20 @@ class StackEnv(RigidGymEnv):
     change it); terminated on success only with ``terminate_on_success=True`` (default False).
 
     ## Arguments
+    ``start_placed`` (default 0, in [0, 1]): the chance that an episode's tower stands where
+    cube 0 starts (cube 0 placed from the start, only cube 1 to be put on it): a curriculum
+    for training (the env id's episodes, and every evaluation, use 0). And every task's:
+
     {arguments}
     """
 
-    task = Stack()
+    task = STACK
+
+    def __init__(self, start_placed: float = 0.0, **kwargs):
+        self.task = stack(start_placed)
+        super().__init__(**kwargs)
+
+    @classmethod
+    def split_arguments(cls, kwargs):
+        rest = dict(kwargs)
+        return stack(rest.pop("start_placed", 0.0)), rest

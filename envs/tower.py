@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigid_gym.checks import integer
+from rigid_gym.checks import in_range, integer
 from rigid_gym.recordable import Marker
 from rigid_gym.render import DYNAMIC_PALETTE
 from rigid_gym.shapes import Box
@@ -50,9 +50,12 @@ class Tower(Task):
 
     has_grip = True
 
-    def __init__(self, num_cubes: int = NUM_CUBES):
+    def __init__(self, num_cubes: int = NUM_CUBES, start_placed: float = 0.0):
         self.num_cubes = num_cubes
         self.goal_size = 3 * num_cubes
+        self.start_placed = start_placed
+        """The chance that an episode's tower stands where cube 0 starts (cube 0 placed from
+        the start: a curriculum for training, see TowerEnv); 0 for the env ids' episodes."""
         if num_cubes > 3:  # the default view cuts off a tower of 4 or 5 at the range's edge
             self.camera_view = TALL_VIEW
 
@@ -66,7 +69,12 @@ class Tower(Task):
         return starts
 
     def sample_goals(self, rngs, starts, half, places):
-        xy = np.array([sample_apart(rng, TOWER_RANGE, cubes, TOWER_CLEARANCE)
+        # with start_placed > 0 a draw first decides whether the tower stands on cube 0's
+        # start (the other cubes are CUBE_SPACING = TOWER_CLEARANCE from it); at 0 nothing is
+        # drawn for it, so the env ids' episodes are unchanged
+        xy = np.array([cubes[0, :2] if self.start_placed > 0.0
+                       and rng.uniform() < self.start_placed
+                       else sample_apart(rng, TOWER_RANGE, cubes, TOWER_CLEARANCE)
                        for rng, cubes in zip(rngs, starts)])
         # cube k's centre: the edges of the cubes below it, then its own half edge
         heights = np.cumsum(2.0 * half, axis=1) - half
@@ -116,10 +124,13 @@ TOWERS = {n: Tower(n) for n in range(CUBES_RANGE[0], CUBES_RANGE[1] + 1)}
 """The Tower of each allowed size, shared (a Task holds no state)."""
 
 
-def tower(num_cubes: int) -> Tower:
-    """The Tower of ``num_cubes`` cubes: an int in CUBES_RANGE, else a ValueError that says
-    so."""
-    return TOWERS[integer(num_cubes, "TowerEnv: num_cubes", *CUBES_RANGE)]
+def tower(num_cubes: int, start_placed: float = 0.0) -> Tower:
+    """The Tower of ``num_cubes`` cubes (an int in CUBES_RANGE) whose episodes start with
+    cube 0 placed with chance ``start_placed`` (in [0, 1]); a ValueError that says so for
+    other values."""
+    n = integer(num_cubes, "TowerEnv: num_cubes", *CUBES_RANGE)
+    chance = in_range(start_placed, 0.0, 1.0, "TowerEnv: start_placed")
+    return TOWERS[n] if chance == 0.0 else Tower(n, chance)
 
 
 class TowerEnv(RigidGymEnv):
@@ -177,18 +188,21 @@ class TowerEnv(RigidGymEnv):
     fixed). Terminated on success only with ``terminate_on_success=True`` (default False).
 
     ## Arguments
-    ``num_cubes`` (default 3): the cubes in the tower, an int in [2, 5]. And every task's:
+    ``num_cubes`` (default 3): the cubes in the tower, an int in [2, 5]. ``start_placed``
+    (default 0, in [0, 1]): the chance that an episode's tower stands where cube 0 starts, so
+    that only the cubes above it are to be moved: a curriculum for training (the env ids'
+    episodes, and every evaluation, use 0). And every task's:
 
     {arguments}
     """
 
     task = tower(NUM_CUBES)
 
-    def __init__(self, num_cubes: int = NUM_CUBES, **kwargs):
-        self.task = tower(num_cubes)
+    def __init__(self, num_cubes: int = NUM_CUBES, start_placed: float = 0.0, **kwargs):
+        self.task = tower(num_cubes, start_placed)
         super().__init__(**kwargs)
 
     @classmethod
     def split_arguments(cls, kwargs):
         rest = dict(kwargs)
-        return tower(rest.pop("num_cubes", NUM_CUBES)), rest
+        return tower(rest.pop("num_cubes", NUM_CUBES), rest.pop("start_placed", 0.0)), rest
