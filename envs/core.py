@@ -270,7 +270,9 @@ class TaskBatch:
         elif self.options.reward_type == "shaped":
             held = gripper.held[copies] if self.task.has_grip \
                 else np.full(len(worlds), -1, dtype=np.int64)
-            rewards = np.where(successes, 1.0, self.task.shaped(
+            finished = successes & (held < 0) if self.task.finished_by_letting_go \
+                else successes
+            rewards = np.where(finished, 1.0, self.task.shaped(
                 clean, held, achieved64, desired64, self.half[copies], self.released[copies]))
         else:
             rewards = self.task.reward(achieved64, desired64, "dense")

@@ -63,8 +63,9 @@ class StackEnv(RigidGymEnv):
     stages until it is placed (within 0.05 m of its target and let go of), then 4 + cube 1's;
     a cube's stages are reach, 1 - tanh(5 d) of the pad's distance to it, until the pad holds
     it (or it lies within 0.05 m of its target), then carry, 2 + (1 - tanh(5 d)) of its
-    distance to its target; divided by 8; 1 when reached. Placing cube 0 takes the reward
-    from at most 3/8 (holding it at its target) to at least 4/8. Episode returns of
+    distance to its target; divided by 8; 1 when reached and the pad holds nothing. Placing
+    cube 0 takes the reward from at most 3/8 (holding it at its target) to at least 4/8;
+    holding cube 1 on cube 0 pays at most 7/8, though the goal test is met. Episode returns of
     hand-written policies (seeds 0-39): the scripted stack 85.2; the same holding cube 1
     2.5 cm above its target 75.5; carrying cube 0 over its target and holding it 35.5.
 

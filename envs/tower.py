@@ -49,6 +49,7 @@ class Tower(Task):
     target and each rests on the one below as the targets do."""
 
     has_grip = True
+    finished_by_letting_go = True
 
     def __init__(self, num_cubes: int = NUM_CUBES, start_placed: float = 0.0):
         self.num_cubes = num_cubes
@@ -172,10 +173,11 @@ class TowerEnv(RigidGymEnv):
     0.05 m of its target and not held; the top cube when all are); a cube's stages are reach,
     1 - tanh(5 d) of the pad's distance to it, until the pad holds it (or it lies within
     0.05 m of its target), then carry, 2 + (1 - tanh(5 d)) of its distance to its target;
-    divided by 4 n; 1 when reached. Placing pays: letting a cube go at its target takes the
-    reward from at most 3 to at least 4 (plus the next cube's reach), so holding a cube at its
-    target is worth less than putting it down, and a placed cube keeps paying after the pad
-    lets go.
+    divided by 4 n; 1 when reached and the pad holds nothing. Placing pays: letting a cube go
+    at its target takes the reward from at most 3 to at least 4 (plus the next cube's reach),
+    so holding a cube at its target is worth less than putting it down (the top cube held on
+    the tower too: at most (4 n - 1) / 4 n, though the goal test is met), and a placed cube
+    keeps paying after the pad lets go.
 
     ## Starting state
     Cubes at x, y uniform in [-0.15, 0.15] m, at least 0.08 m apart, resting, unrotated; the

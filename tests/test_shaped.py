@@ -169,3 +169,24 @@ def test_the_batched_env_gives_the_single_envs_shaped_rewards():
     for step in actions:
         batch = vector.step(step)[1]
         assert [env.step(a)[1] for env, a in zip(singles, step)] == batch.tolist()
+
+
+def test_a_stack_met_with_the_top_cube_still_held_pays_less_than_letting_go():
+    """The goal test reads only where the cubes are, so it is met while the pad holds cube 1
+    on cube 0; the shaped reward pays 1 only once the pad lets go (7/8 before)."""
+    env = gym.make("rigid_gym/Stack-v0", reward_type="shaped")
+    policy = scripted_policy(env)
+    layout = env.unwrapped.task.observation_layout
+    obs, _ = env.reset(seed=0)
+    steps = []
+    for _ in range(60):
+        action = policy(obs)
+        held = obs["observation"][layout.slice("holding")][0] > 0.5
+        if held and np.linalg.norm(obs["desired_goal"][3:5] - obs["achieved_goal"][3:5]) < 0.006:
+            action = np.array([0.0, 0.0, -0.3, 1.0])  # down onto cube 0, never letting go
+        obs, reward, _, _, info = env.step(action)
+        steps.append((info["is_success"], obs["observation"][layout.slice("holding")][0] > 0.5,
+                      reward))
+    met_held = [r for met, holding, r in steps if met and holding]
+    assert len(met_held) > 10 and all(6 / 8 < r <= 7 / 8 for r in met_held)
+    assert not any(r == 1.0 for _, _, r in steps)
