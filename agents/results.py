@@ -25,15 +25,19 @@ RESULTS = Path(__file__).with_name("results")
 
 def method(run: dict) -> str:
     """The algorithm as the table names it, from a run.json record, e.g. "SAC + HER + 200
-    demos" or "PPO, shaped reward"."""
+    demos", "PPO, shaped reward" or, with Stack's curriculum (``start_placed``), "PPO, shaped
+    reward, 50% of episodes start with cube 0 placed"."""
     name = run["algo"].upper()
     if "HerReplayBuffer" in str(run["kwargs"].get("replay_buffer_class", "")):
         name += " + HER"
     demos = run.get("demonstrations")
     if demos:
         name += f" + {demos['episodes']} demos"
-    reward = (run.get("env_kwargs") or {}).get("reward_type")
-    return name + (f", {reward} reward" if reward else "")
+    env_kwargs = run.get("env_kwargs") or {}
+    reward = env_kwargs.get("reward_type")
+    name += f", {reward} reward" if reward else ""
+    placed = env_kwargs.get("start_placed")
+    return name + (f", {placed:.0%} of episodes start with cube 0 placed" if placed else "")
 
 
 def load_results(folder: str | Path) -> list[dict]:

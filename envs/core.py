@@ -68,11 +68,13 @@ class TaskBatch:
     can randomise them: the copies of a World share its geometry).
 
     State, every array with the leading copy axis: ``goals`` (B, goal_size) m, ``half``
-    (B, cubes) m the cubes' half edges, ``places`` (B, fixtures, 3) m, ``rngs`` (B,) each
-    copy's generator (None until its first reset); the World, its ``gripper`` (the task's
-    effector: a SuctionGripper, or a ParallelGripper with ``effector="gripper"``) and the
-    body indices ``cubes``, ``fixtures``, ``table``, ``gripper_body`` (the pad, or the
-    hand) and ``gripper_bodies`` (with the fingers).
+    (B, cubes) m the cubes' half edges, ``places`` (B, fixtures, 3) m, ``released`` (B,)
+    bool whether the effector has let go of an object it held this episode (the shaped
+    reward's memory: Throw pays for the throw, not the hold), ``rngs`` (B,) each copy's
+    generator (None until its first reset); the World, its ``gripper`` (the task's effector:
+    a SuctionGripper, or a ParallelGripper with ``effector="gripper"``) and the body indices
+    ``cubes``, ``fixtures``, ``table``, ``gripper_body`` (the pad, or the hand) and
+    ``gripper_bodies`` (with the fingers).
     """
 
     def __init__(self, task: Task, options: Options, num_worlds: int | None, name: str):
@@ -84,6 +86,7 @@ class TaskBatch:
         self.goals = np.zeros((b, task.goal_size))
         self.half = np.full((b, task.num_cubes), CUBE_HALF)
         self.places = np.zeros((b, task.num_fixtures, 3))
+        self.released = np.zeros(b, dtype=bool)
         # the goals as observed (float32), and as the goal test reads them (float64 of those)
         self.desired = np.zeros((b, task.goal_size), dtype=np.float32)
         self.desired64 = np.zeros((b, task.goal_size))
@@ -182,6 +185,7 @@ class TaskBatch:
         self.write(copies, rows, starts, places, factors)
         self.half[copies] = half
         self.places[copies] = places
+        self.released[copies] = False
         goals = self.task.sample_goals(rngs, starts, half, places)
         self.goals[copies] = goals
         self.desired[copies] = goals
@@ -223,12 +227,17 @@ class TaskBatch:
 
     def step(self, actions: np.ndarray) -> Outcome:
         """One env step of every copy: ``actions`` (B, action size), checked and clipped to
-        [-1, 1], command the grippers; the solver runs SOLVER_STEPS steps of every world in
-        one call (held objects carried in it); returns every copy's Outcome."""
+        [-1, 1], command the grippers (noting the copies that let go: ``released``); the
+        solver runs SOLVER_STEPS steps of every world in one call (held objects carried in
+        it); returns every copy's Outcome."""
         world, gripper = self.built()
         grips = actions[:, 3] if self.task.has_grip else None
+        shaped = self.options.reward_type == "shaped"  # the only reader of ``released``
+        holding = gripper.grasp(ALL)[0] >= 0 if shaped else None
         gripper.command(actions[:, :3], grips)
         world.step(SOLVER_STEPS)
+        if holding is not None:  # after the step: the fingers open over its solver steps
+            self.released |= holding & (gripper.grasp(ALL)[0] < 0)
         return self.observe(ALL)
 
     # -- observations and rewards -----------------------------------------------------------
@@ -271,8 +280,10 @@ class TaskBatch:
         elif self.options.reward_type == "shaped":
             if held is None:  # a task without a grip holds nothing
                 held = np.full(len(worlds), -1, dtype=np.int64)
-            rewards = np.where(successes, 1.0, self.task.shaped(
-                clean, held, achieved64, desired64, self.half[copies]))
+            finished = successes & (held < 0) if self.task.finished_by_letting_go \
+                else successes
+            rewards = np.where(finished, 1.0, self.task.shaped(
+                clean, held, achieved64, desired64, self.half[copies], self.released[copies]))
         else:
             rewards = self.task.reward(achieved64, desired64, "dense")
         observations = {"observation": vectors.astype(np.float32), "achieved_goal": achieved,

@@ -174,7 +174,7 @@ class Flip(Task):
         return [Marker(Box((h, h, h)), MARKER_PLACE, GOAL_COLOR, MARKER_ALPHA, orientation,
                        FACE_COLORS)]
 
-    def shaped(self, vectors, held, achieved_goal, desired_goal, half):
+    def shaped(self, vectors, held, achieved_goal, desired_goal, half, released):
         layout = self.observation_layout
         pad = vectors[:, layout.slice("pad.position")]
         cube = vectors[:, layout.slice("cube0.position")]

@@ -63,7 +63,7 @@ class Slide(Push):
         xy = np.array([rng.uniform(low, high) for rng in rngs])
         return np.concatenate([xy, half[:, :1]], axis=1)
 
-    def shaped(self, vectors, held, achieved_goal, desired_goal, half):
+    def shaped(self, vectors, held, achieved_goal, desired_goal, half, released):
         layout = self.observation_layout
         sliding = distance(vectors[:, layout.slice("cube0.velocity")]) > SLIDING
         return self.stages(vectors[:, layout.slice("pad.position")], sliding, achieved_goal,

@@ -91,6 +91,11 @@ class Task:
     """Six (r, g, b): the colours in frames of an object's faces towards +x, -x, +y, -y, +z,
     -z of its frame, for a task whose objects' orientation must be seen (Flip); None: each
     object in one colour."""
+    finished_by_letting_go: bool = False
+    """Whether the shaped reward pays 1 at the goal only once the pad holds nothing (a task
+    finished by putting objects down: a Tower), else ``shaped`` goes on paying there (its
+    value for a cube held at its target, below 1), so that a policy lets go rather than
+    holds the last cube in place."""
     markers_in_pixels: bool = True
     """Whether ``pixels`` observations draw the goal markers (the copies of a batch share each
     marker's orientation, so a goal that is an orientation is not drawn there)."""
@@ -176,15 +181,17 @@ class Task:
         """The shaped reward (``reward_type="shaped"``) of copies whose pad is at ``pad``
         (k, 3) m, holding cube ``held`` (k,) (-1: none), with goals (k, goal_size) m and cube
         half edges ``half`` (k, cubes) m -> (k,) in [0, 1) (the env gives 1 where the goal is
-        reached). Staged as ManiSkill's dense rewards: see ``staged``."""
+        reached, and, where ``finished_by_letting_go``, nothing is held). Staged as ManiSkill's dense rewards: see ``staged``."""
         raise NotImplementedError
 
     def shaped(self, vectors: np.ndarray, held: np.ndarray, achieved_goal: np.ndarray,
-               desired_goal: np.ndarray, half: np.ndarray) -> np.ndarray:
+               desired_goal: np.ndarray, half: np.ndarray, released: np.ndarray) -> np.ndarray:
         """The shaped reward of copies whose noise-free observation vectors are ``vectors``
-        (k, layout size): ``shaped_reward`` of the pad's (or the hand's) position read from
-        them. A task whose stages read more of the state than the pad and the goals (Flip: the
-        cube's position, which its goal does not hold) overrides this."""
+        (k, layout size) and whose effector has let go of an object it held this episode
+        where ``released`` (k,) bool: ``shaped_reward`` of the pad's (or the hand's) position
+        read from them. A task whose stages read more of the state than the pad and the goals
+        (Flip: the cube's position, which its goal does not hold; Throw: ``released``)
+        overrides this."""
         layout = self.observation_layout
         pad = vectors[:, layout.slice(f"{layout.effector}.position")]
         return self.shaped_reward(pad, held, achieved_goal, desired_goal, half)

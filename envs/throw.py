@@ -28,8 +28,6 @@ BIN_FRICTION = 0.5
 THROW_SCALE = 2.0
 """1/m: the shaped reward's closeness of the cube to the bin, 1 - tanh(2 d): the bin is 0.25
 to 0.65 m away, where tanh(5 d) has no slope left."""
-IN_FLIGHT = 0.01
-"""m: a cube not held and this far above its resting height counts as thrown (in flight)."""
 
 
 @functools.cache
@@ -85,10 +83,21 @@ class Throw(Task):
     def markers(self, goal, half):
         return [Marker(Sphere(0.015), tuple(goal), GOAL_COLOR, MARKER_ALPHA)]
 
-    def shaped_reward(self, pad, held, achieved_goal, desired_goal, half):
-        flying = achieved_goal[:, 2] > half[:, 0] + IN_FLIGHT
-        return staged(closeness(pad - achieved_goal), (held == 0) | flying,
-                      closeness(achieved_goal - desired_goal, THROW_SCALE)) / 3.0
+    def shaped(self, vectors, held, achieved_goal, desired_goal, half, released):
+        layout = self.observation_layout
+        pad = vectors[:, layout.slice(f"{layout.effector}.position")]
+        return self.shaped_reward(pad, held, achieved_goal, desired_goal, half, released)
+
+    def shaped_reward(self, pad, held, achieved_goal, desired_goal, half, released=None):
+        """Reach, carry, then thrown: ``released`` (k,) bool, whether the pad has let go of
+        the cube this episode (``TaskBatch.released``; None: never). Carrying pays 2 + the
+        cube's closeness to the bin, a thrown cube not held 4 + the same closeness, so
+        letting go anywhere is worth more than any hold, and where the cube lands sets how
+        much more; divided by 5."""
+        thrown = (held < 0) & (False if released is None else released)
+        toward = closeness(achieved_goal - desired_goal, THROW_SCALE)
+        carry = staged(closeness(pad - achieved_goal), held == 0, toward)
+        return np.where(thrown, 4.0 + toward, carry) / 5.0
 
 
 class ThrowEnv(RigidGymEnv):
@@ -132,8 +141,14 @@ class ThrowEnv(RigidGymEnv):
     inside half width) of the goal in x and in y, and within 0.05 m in z. sparse: 0 when
     reached, else -1; dense: minus the distance, m. shaped (for on-policy learners; staged as
     ManiSkill's dense rewards), in [0, 1]: reach, 1 - tanh(5 d) of the pad's distance to the
-    cube, until the pad holds it or it flies (released, 0.01 m above resting); then
-    2 + (1 - tanh(2 d)) of the cube's distance to the goal; divided by 3; 1 when in the bin.
+    cube; carry, while the pad holds it, 2 + (1 - tanh(2 d)) of the cube's distance to the
+    goal; thrown, once the pad has let go of it this episode and while it does not hold it,
+    4 + the same closeness; divided by 5; 1 when in the bin. Any release is worth more than
+    any hold (a hold pays at most 0.51 a step, at the edge of the reach; a thrown cube at
+    least 0.8), and where the cube lands sets how much more. Episode returns of hand-written
+    policies (seeds 0-39): the scripted throw 43.3, a throw at 0.8 times its speed (a miss)
+    41.7, dropping the cube where it was picked up 30.0, carrying it to the edge of the reach
+    and holding it there 22.6.
 
     ## Starting state
     Cube at x, y uniform in [-0.1, 0.1] m, resting; bin centre x in [0.5, 0.65] m, y in

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rigid_gym.checks import integer
+from rigid_gym.checks import in_range, integer
 from rigid_gym.recordable import Marker
 from rigid_gym.render import DYNAMIC_PALETTE
 from rigid_gym.shapes import Box
@@ -34,6 +34,10 @@ NUM_CUBES = 3
 CUBES_RANGE = (2, 5)
 """The allowed ``num_cubes``: 2 (Stack's tower) to 5 (a 20 cm tower of 4 cm cubes, within the
 pad's reach with the top cube held under it)."""
+PLACE_STAGE = 4.0
+"""The shaped reward's worth (before its division by 4 n) of each cube placed (let go of at
+its target) below the one being worked on: 1 more than carrying that cube to its target pays
+(3), so that a cube is put down, not held."""
 TALL_VIEW = ((0.45, -0.6, 0.55), (0.0, 0.0, 0.08), 40.0)
 """The rgb_array camera of towers of 4 and 5 (20 cm) cubes: the pixel observations' "front"
 camera, wider than the default, which frames towers of up to 3 anywhere in the range."""
@@ -46,10 +50,14 @@ class Tower(Task):
 
     has_grip = True
     grasps = True
+    finished_by_letting_go = True
 
-    def __init__(self, num_cubes: int = NUM_CUBES):
+    def __init__(self, num_cubes: int = NUM_CUBES, start_placed: float = 0.0):
         self.num_cubes = num_cubes
         self.goal_size = 3 * num_cubes
+        self.start_placed = start_placed
+        """The chance that an episode's tower stands where cube 0 starts (cube 0 placed from
+        the start: a curriculum for training, see TowerEnv); 0 for the env ids' episodes."""
         if num_cubes > 3:  # the default view cuts off a tower of 4 or 5 at the range's edge
             self.camera_view = TALL_VIEW
 
@@ -63,7 +71,12 @@ class Tower(Task):
         return starts
 
     def sample_goals(self, rngs, starts, half, places):
-        xy = np.array([sample_apart(rng, TOWER_RANGE, cubes, TOWER_CLEARANCE)
+        # with start_placed > 0 a draw first decides whether the tower stands on cube 0's
+        # start (the other cubes are CUBE_SPACING = TOWER_CLEARANCE from it); at 0 nothing is
+        # drawn for it, so the env ids' episodes are unchanged
+        xy = np.array([cubes[0, :2] if self.start_placed > 0.0
+                       and rng.uniform() < self.start_placed
+                       else sample_apart(rng, TOWER_RANGE, cubes, TOWER_CLEARANCE)
                        for rng, cubes in zip(rngs, starts)])
         # cube k's centre: the edges of the cubes below it, then its own half edge
         heights = np.cumsum(2.0 * half, axis=1) - half
@@ -97,26 +110,31 @@ class Tower(Task):
         n = self.num_cubes
         cubes = achieved_goal.reshape(-1, n, 3)
         targets = desired_goal.reshape(-1, n, 3)
-        placed = distance(cubes - targets) < DISTANCE_THRESHOLD  # (k, n)
-        # the cube being worked on: the first not at its target (the top one when all are)
+        near = distance(cubes - targets) < DISTANCE_THRESHOLD  # (k, n)
+        # placed: at its target and let go of (a cube held there is still being carried)
+        placed = near & (held[:, None] != np.arange(n))
+        # the cube being worked on: the first not placed (the top one when all are)
         current = np.minimum(np.cumprod(placed, axis=1).sum(axis=1), n - 1)
         rows = np.arange(len(cubes))
         cube, target = cubes[rows, current], targets[rows, current]
-        # its stages: reach it, hold it (or it lies at its target), carry it; 3 per cube
-        # below it, all of which lie at their targets
-        carry = staged(closeness(pad - cube), (held == current) | placed[rows, current],
+        # its stages: reach it, hold it (or it lies at its target), carry it, in [0, 3]; 4
+        # per cube below it, all placed: placing a cube pays more than carrying it there
+        carry = staged(closeness(pad - cube), (held == current) | near[rows, current],
                        closeness(cube - target))
-        return (3.0 * current + carry) / (3.0 * n)
+        return (PLACE_STAGE * current + carry) / (PLACE_STAGE * n)
 
 
 TOWERS = {n: Tower(n) for n in range(CUBES_RANGE[0], CUBES_RANGE[1] + 1)}
 """The Tower of each allowed size, shared (a Task holds no state)."""
 
 
-def tower(num_cubes: int) -> Tower:
-    """The Tower of ``num_cubes`` cubes: an int in CUBES_RANGE, else a ValueError that says
-    so."""
-    return TOWERS[integer(num_cubes, "TowerEnv: num_cubes", *CUBES_RANGE)]
+def tower(num_cubes: int, start_placed: float = 0.0) -> Tower:
+    """The Tower of ``num_cubes`` cubes (an int in CUBES_RANGE) whose episodes start with
+    cube 0 placed with chance ``start_placed`` (in [0, 1]); a ValueError that says so for
+    other values."""
+    n = integer(num_cubes, "TowerEnv: num_cubes", *CUBES_RANGE)
+    chance = in_range(start_placed, 0.0, 1.0, "TowerEnv: start_placed")
+    return TOWERS[n] if chance == 0.0 else Tower(n, chance)
 
 
 class TowerEnv(RigidGymEnv):
@@ -154,12 +172,15 @@ class TowerEnv(RigidGymEnv):
     tests read only the goals, so HER can recompute them, also for goals relabelled from where
     the cubes lay. sparse: 0 when reached, else -1; dense: minus the distance between the
     3 n-vectors, m. shaped (for on-policy learners; staged as ManiSkill's dense rewards), in
-    [0, 1]: 3 k + the stages of cube k, where cube k is the first cube not within 0.05 m of its
-    target (the top cube when all are); a cube's stages are reach, 1 - tanh(5 d) of the pad's
-    distance to it, until the pad holds it (or it lies within 0.05 m of its target: letting go
-    there keeps the stage), then carry, 2 + (1 - tanh(5 d)) of its distance to its target;
-    divided by 3 n; 1 when reached. A stage is paid for by where the cubes lie, so a cube put
-    in its place keeps paying after the pad lets go.
+    [0, 1]: 4 k + the stages of cube k, where cube k is the first cube not placed (within
+    0.05 m of its target and not held; the top cube when all are); a cube's stages are reach,
+    1 - tanh(5 d) of the pad's distance to it, until the pad holds it (or it lies within
+    0.05 m of its target), then carry, 2 + (1 - tanh(5 d)) of its distance to its target;
+    divided by 4 n; 1 when reached and the pad holds nothing. Placing pays: letting a cube go
+    at its target takes the reward from at most 3 to at least 4 (plus the next cube's reach),
+    so holding a cube at its target is worth less than putting it down (the top cube held on
+    the tower too: at most (4 n - 1) / 4 n, though the goal test is met), and a placed cube
+    keeps paying after the pad lets go.
 
     ## Starting state
     Cubes at x, y uniform in [-0.15, 0.15] m, at least 0.08 m apart, resting, unrotated; the
@@ -172,17 +193,20 @@ class TowerEnv(RigidGymEnv):
     fixed). Terminated on success only with ``terminate_on_success=True`` (default False).
 
     ## Arguments
-    ``num_cubes`` (default 3): the cubes in the tower, an int in [2, 5]. And every task's:
+    ``num_cubes`` (default 3): the cubes in the tower, an int in [2, 5]. ``start_placed``
+    (default 0, in [0, 1]): the chance that an episode's tower stands where cube 0 starts, so
+    that only the cubes above it are to be moved: a curriculum for training (the env ids'
+    episodes, and every evaluation, use 0). And every task's:
 
     {arguments}
     """
 
     task = tower(NUM_CUBES)
 
-    def __init__(self, num_cubes: int = NUM_CUBES, **kwargs):
-        self.task = tower(num_cubes)
+    def __init__(self, num_cubes: int = NUM_CUBES, start_placed: float = 0.0, **kwargs):
+        self.task = tower(num_cubes, start_placed)
         super().__init__(**kwargs)
 
     @classmethod
     def own_task(cls, kwargs):
-        return tower(kwargs.pop("num_cubes", NUM_CUBES))
+        return tower(kwargs.pop("num_cubes", NUM_CUBES), kwargs.pop("start_placed", 0.0))

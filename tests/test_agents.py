@@ -201,6 +201,9 @@ def test_the_table_names_the_method():
     assert method(run) == "SAC + HER + 100 demos"
     assert method({"algo": "ppo", "kwargs": {}, "env_kwargs": {"reward_type": "shaped"}}) == \
         "PPO, shaped reward"
+    assert method({"algo": "ppo", "kwargs": {}, "env_kwargs": {
+        "reward_type": "shaped", "start_placed": 0.5}}) == \
+        "PPO, shaped reward, 50% of episodes start with cube 0 placed"
 
 
 def demo_imitation_error(model) -> float:

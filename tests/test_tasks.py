@@ -266,7 +266,8 @@ def test_a_finished_roll_pays_more_than_any_state_of_the_roll_before():
         vectors[0, layout.slice("pad.position")] = pad
         vectors[0, layout.slice("cube0.position")] = (0.0, 0.0, CUBE_HALF)
         vectors[0, layout.slice("cube0.orientation")] = cube_rotation[:, :2].T.ravel()
-        return task.shaped(vectors, np.array([-1]), np.zeros((1, 4)), goal, half)[0]
+        return task.shaped(vectors, np.array([-1]), np.zeros((1, 4)), goal, half,
+                           np.array([False]))[0]
 
     rolling = [shaped(quaternion.to_matrix(turn([0, 1, 0], d)), (-0.04, 0.0, 0.05))
                for d in (0.0, 10.0, 25.0, 40.0)]
@@ -340,7 +341,7 @@ def test_shaped_rewards_are_bounded_for_any_state():
             achieved, desired = q, quaternion.normalize(rng.normal(size=(k, 4)))
         else:
             achieved, desired = rng.uniform(-0.5, 0.8, (2, k, 3))
-        reward = task.shaped(vectors, held, achieved, desired, half)
+        reward = task.shaped(vectors, held, achieved, desired, half, held >= 0)
         assert reward.shape == (k,) and np.isfinite(reward).all()
         assert (reward >= 0.0).all() and (reward < 1.0).all(), type(task).__name__
 

@@ -154,15 +154,19 @@ def test_tower_shaped_reward_pays_cube_by_cube_and_keeps_a_placed_cube():
     goal = tower_goal()
     cubes = np.array([[0.15, 0.0, 0.02, -0.1, 0.1, 0.02, -0.1, -0.1, 0.02]])
     none_placed = task.shaped_reward(np.array([[0.0, 0.0, 0.2]]), NONE, cubes, goal, HALF3)[0]
-    assert 0.0 < none_placed < 1 / 9  # reaching cube 0
+    assert 0.0 < none_placed < 1 / 12  # reaching cube 0
     one = cubes.copy()
     one[0, :3] = goal[0, :3]
     two = one.copy()
     two[0, 3:6] = goal[0, 3:6]
-    # cube 0 placed, the pad gone: cube 1's reach stage, above all of cube 0's stages
+    # cube 0 placed, the pad gone: cube 1's reach stage, above all of cube 0's stages (4 of
+    # the 12 a cube placed, against at most 3 for one held at its target)
     r1 = task.shaped_reward(np.array([[0.0, 0.0, 0.2]]), NONE, one, goal, HALF3)[0]
     r2 = task.shaped_reward(np.array([[0.0, 0.0, 0.2]]), NONE, two, goal, HALF3)[0]
-    assert 3 / 9 < r1 < 4 / 9 and 6 / 9 < r2 < 7 / 9
+    assert 4 / 12 < r1 < 5 / 12 and 8 / 12 < r2 < 9 / 12
+    held_there = task.shaped_reward(goal[:, 3:6] + [0, 0, 0.035], np.array([1]), two, goal,
+                                    HALF3)[0]
+    assert 6 / 12 < held_there <= 7 / 12 < 8 / 12 < r2  # cube 1 held at its target
     # holding cube 2 (index 2) and carrying it nearer its target grows the reward
     carried = []
     for z in (0.2, 0.15, 0.11):
@@ -170,13 +174,58 @@ def test_tower_shaped_reward_pays_cube_by_cube_and_keeps_a_placed_cube():
         achieved[0, 6:] = [goal[0, 6], goal[0, 7], z]
         carried.append(task.shaped_reward(achieved[:, 6:] + [0, 0, 0.035], np.array([2]),
                                           achieved, goal, HALF3)[0])
-    assert 8 / 9 < carried[0] < carried[1] < carried[2] < 1.0
+    assert 10 / 12 < carried[0] < carried[1] < carried[2] < 11 / 12
     rng = np.random.default_rng(0)
     k = 2000
     reward = task.shaped_reward(rng.uniform(-0.5, 0.8, (k, 3)), rng.integers(-1, 3, k),
                                 rng.uniform(-0.3, 0.3, (k, 9)), rng.uniform(-0.3, 0.3, (k, 9)),
                                 np.repeat(HALF3, k, axis=0))
     assert np.isfinite(reward).all() and (reward >= 0).all() and (reward < 1).all()
+
+
+@pytest.mark.parametrize("env_id", ["rigid_gym/Stack-v0", "rigid_gym/Tower-v0"])
+def test_start_placed_puts_the_tower_on_cube_0_at_the_chance_asked(env_id):
+    """The training curriculum: with chance start_placed the tower stands where cube 0
+    starts (cube 0 placed from the start, the shaped reward past its stages); the default
+    draws the env id's episodes."""
+    plain, always = gym.make(env_id), gym.make(env_id, start_placed=1.0)
+    assert type(always.unwrapped.task).__name__ == type(plain.unwrapped.task).__name__
+    shaped = gym.make(env_id, start_placed=1.0, reward_type="shaped")
+    n = plain.unwrapped.task.num_cubes
+    for seed in range(5):
+        obs, _ = always.reset(seed=seed)
+        goal, cubes = obs["desired_goal"].reshape(n, 3), obs["achieved_goal"].reshape(n, 3)
+        assert np.array_equal(goal[0], cubes[0])  # float32 of the same float64
+        assert np.allclose(goal[1:, :2], cubes[0, :2]) and np.all(np.diff(goal[:, 2]) > 0)
+        shaped.reset(seed=seed)
+        assert shaped.step(np.zeros(4))[1] > 4 / (4 * n)  # cube 0 placed, let go of
+    half = gym.make(env_id, start_placed=0.5)
+    placed = []
+    for seed in range(200):
+        obs = half.reset(seed=seed)[0]
+        placed.append(np.array_equal(obs["desired_goal"][:3], obs["achieved_goal"][:3]))
+        # the cubes are drawn before the goal, so each seed starts them where the id does
+        assert np.array_equal(obs["achieved_goal"], plain.reset(seed=seed)[0]["achieved_goal"])
+    assert 0.4 < np.mean(placed) < 0.6  # 200 draws: 5 standard deviations are 0.18 wide
+    assert not any(np.array_equal(o["desired_goal"][:3], o["achieved_goal"][:3])
+                   for o in (plain.reset(seed=s)[0] for s in range(50)))
+
+
+@pytest.mark.parametrize("bad", [-0.1, 1.5, float("nan"), "half"])
+def test_start_placed_outside_0_to_1_is_refused_by_name(bad):
+    with pytest.raises(ValueError, match="start_placed"):
+        gym.make("rigid_gym/Stack-v0", start_placed=bad)
+    with pytest.raises(ValueError, match="start_placed"):
+        gym.make_vec("rigid_gym/Tower-v0", num_envs=2, start_placed=bad)
+
+
+def test_a_vector_stack_with_start_placed_plays_the_single_envs_episodes():
+    vector = gym.make_vec("rigid_gym/Stack-v0", num_envs=4, start_placed=0.5)
+    singles = [gym.make("rigid_gym/Stack-v0", start_placed=0.5) for _ in range(4)]
+    observations = vector.reset(seed=11)[0]
+    for i, env in enumerate(singles):
+        first = env.reset(seed=11 + i)[0]
+        assert observations["desired_goal"][i].tobytes() == first["desired_goal"].tobytes()
 
 
 # -- Insert --------------------------------------------------------------------------------
