@@ -57,6 +57,25 @@ def test_a_cube_under_the_gripper_is_lifted_by_friction_and_slips_without_it():
     assert abs(cube) < 1e-4
 
 
+def test_a_cube_gripped_below_its_centre_neither_pivots_nor_lags_as_the_hand_speeds_up():
+    """The squeeze (src/solver/squeeze.h): the pads take the cube 5 mm below its centre of
+    mass, so the hand's acceleration along the pads (y, 5 m/s^2 for 0.1 s) turns it about the
+    pads' normal (x) unless the spin about that normal is resolved with the squeeze; held, it
+    keeps its pose relative to the hand to 1e-9 m and 1e-9 rad (round-off)."""
+    scene = rg.Scene()
+    hand, cube, _, _ = scenes.gripper(scene, (0.0, 0.0, 1.0), 0.1, 20.0, 0.5)
+    world = rg.World(scene, dt=DT, config=rg.SolverConfig.for_scene(scene))
+    world.step(24)
+    start = world.position[cube] - world.position[hand]
+    for k in range(24):
+        world.set_velocity(hand, (0.0, 5.0 * DT * (k + 1), 0.0))
+        world.step()
+    assert world.position[hand, 1] > 0.02
+    assert np.abs(world.position[cube] - world.position[hand] - start).max() < 1e-9
+    turn = 2.0 * np.linalg.norm(world.orientation[cube, 1:])
+    assert turn < 1e-9
+
+
 @pytest.mark.parametrize("restitution", [0.0, 0.5, 1.0])
 def test_a_hinged_rod_rebounds_from_a_block_by_its_angular_impulse_about_the_pivot(restitution):
     """A rod hinged at its end strikes a block at omega = 2 rad/s. Its contact point moves only

@@ -29,9 +29,9 @@
 // The stage order gives a squeezed cube its equilibrium within each step: the joint velocity
 // stage (before the contact stage) drives each finger inwards with its motor's F dt, the
 // contact stage stops the fingers against the cube with a normal impulse of F dt a face (the
-// fingers move only along their axes), and friction on each face, up to mu F dt over the
-// step, is taken by the joints from the hand: the cube is held while m (g + a) < 2 mu F and
-// slides at 2 mu F / m - g otherwise (the report's grasp case).
+// fingers move only along their axes; both faces at once, squeeze.h), and friction on each
+// face, up to mu F dt over the step, is taken by the joints from the hand: the cube is held
+// while m (g + a) < 2 mu F and slides at 2 mu F / m - g otherwise (the report's grasp case).
 //
 // Where both bodies of a pair move only along fewer than three directions at the contact
 // point (an articulated body against an immovable one), K is singular: impulse.h's

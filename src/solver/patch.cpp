@@ -5,6 +5,7 @@
 #include <cmath>
 #include <optional>
 
+#include "base/dense.h"
 #include "solver/mobility.h"
 
 namespace rg {
@@ -83,50 +84,6 @@ void add_wrench_matrix(const BodyStates& bodies, const BodyModel& model, int i, 
     } else {
         add_body_wrench_matrix(model.inverse_mass[i], bodies.inverse_inertia[i], r, big);
     }
-}
-
-// Solve m[:size, :size] x = rhs[:size] by Gaussian elimination with partial pivoting (m and
-// rhs are overwritten); false for a (near-)singular matrix.
-bool solve_dense(Matrix6& m, double* rhs, int size, double* out) {
-    double largest = 0.0;
-    for (int i = 0; i < size; ++i) {
-        largest = std::max(largest, std::fabs(m[i][i]));
-    }
-    if (largest == 0.0) {
-        return false;
-    }
-    for (int col = 0; col < size; ++col) {
-        int pivot = col;
-        for (int row = col + 1; row < size; ++row) {
-            if (std::fabs(m[row][col]) > std::fabs(m[pivot][col])) {
-                pivot = row;
-            }
-        }
-        if (std::fabs(m[pivot][col]) <= SINGULAR * largest) {
-            return false;
-        }
-        if (pivot != col) {
-            for (int k = 0; k < size; ++k) {
-                std::swap(m[col][k], m[pivot][k]);
-            }
-            std::swap(rhs[col], rhs[pivot]);
-        }
-        for (int row = col + 1; row < size; ++row) {
-            const double f = m[row][col] / m[col][col];
-            for (int k = col; k < size; ++k) {
-                m[row][k] -= f * m[col][k];
-            }
-            rhs[row] -= f * rhs[col];
-        }
-    }
-    for (int row = size - 1; row >= 0; --row) {
-        double acc = rhs[row];
-        for (int k = row + 1; k < size; ++k) {
-            acc -= m[row][k] * out[k];
-        }
-        out[row] = acc / m[row][row];
-    }
-    return true;
 }
 
 // True when the centre of pressure c + d lies within the patch (its support along d reaches
@@ -462,7 +419,7 @@ bool solve_sliding(const Matrix6& big, const Vec3* d, int tips, Vec3 s, Vec3 n, 
     for (int k = 0; k < tips; ++k) {
         rhs[1 + k] = target.tip[k] - dot(w, d[k]);
     }
-    if (!solve_dense(system, rhs, 1 + tips, sol)) {
+    if (!solve_dense(system, rhs, 1 + tips, sol, SINGULAR)) {
         return false;
     }
     jn = sol[0];
@@ -625,7 +582,7 @@ std::optional<PatchResult> static_wrench(const PairLevers& pair, const ContactSe
         const double spin = dot(f.w, f.d[k]);
         rhs[3 + k] = k == f.tips ? -spin : target.tip[k] - spin;
     }
-    if (!solve_dense(system, rhs, 3 + f.tips + 1, sol)) {
+    if (!solve_dense(system, rhs, 3 + f.tips + 1, sol, SINGULAR)) {
         return std::nullopt;
     }
     const Vec3 j = {sol[0], sol[1], sol[2]};

@@ -8,6 +8,7 @@
 #include "solver/contacts.h"
 #include "solver/impulse.h"
 #include "solver/mobility.h"
+#include "solver/squeeze.h"
 
 namespace rg {
 
@@ -45,6 +46,23 @@ bool same_motion(const BodyStates& s, int64_t p, int64_t q) {
     return std::fabs(vp.x - cp.x - vq.x + cq.x) <= SAME_MOTION &&
            std::fabs(vp.y - cp.y - vq.y + cq.y) <= SAME_MOTION &&
            std::fabs(vp.z - cp.z - vq.z + cq.z) <= SAME_MOTION;
+}
+
+// The approach speed of each of body a's `count` contacts in set, kept in set.depth
+// (negative: approaching), the separation at the start of the step that it and the predicted
+// depth imply in set.gap, every contact unassigned to a patch; true if one approaches.
+bool measure_approach(const StepContext& w, const ContactSet& set, int a, int64_t count,
+                      double dt) {
+    bool any_approaching = false;
+    for (int64_t i = 0; i < count; ++i) {
+        const Vec3 v = relative_velocity(w, set, a, static_cast<int>(set.partner[i]), i);
+        const double vn = dot(v, set.normal[i]);
+        set.gap[i] = -(set.depth[i] + dt * vn);
+        set.depth[i] = vn;
+        set.group[i] = -1;
+        any_approaching = any_approaching || vn < -REST_SPEED;
+    }
+    return any_approaching;
 }
 
 // Put every unassigned contact whose normal is within PATCH_COS of contact seed's, and whose
@@ -311,16 +329,12 @@ bool alone(const StepContext& w, int a, int b) {
            (w.model.motion[b] != DYNAMIC || w.pairs_of[b] == 1);
 }
 
-// The first of the pairs of body a = pair k's a when a is held by immovable bodies alone:
-// dynamic, in two or more pairs, all with static or kinematic partners; -1 otherwise (or
-// without Settings::contact_patches). Pairs are listed sorted by (a, b) (broad_phase.h) and
-// a dynamic body is the a of its pairs with static and kinematic bodies, so a held body's
-// pairs (w.pairs_of of them) follow each other from the first.
-int64_t held_start(const StepContext& w, int64_t k, int64_t pairs) {
+// The first of the pairs of body a = pair k's a when all of them (w.pairs_of[a]) have a as
+// their a: pairs are listed sorted by (a, b) (broad_phase.h), so they follow each other from
+// the first; -1 otherwise. A dynamic body is the a of its pairs with static and kinematic
+// bodies, and of those with dynamic bodies listed after it.
+int64_t first_own_pair(const StepContext& w, int64_t k, int64_t pairs) {
     const int a = w.lists.pair_a[k];
-    if (!w.settings->contact_patches || w.model.motion[a] != DYNAMIC || w.pairs_of[a] < 2) {
-        return -1;
-    }
     int64_t start = k;
     while (start > 0 && w.lists.pair_a[start - 1] == a) {
         start -= 1;
@@ -330,7 +344,24 @@ int64_t held_start(const StepContext& w, int64_t k, int64_t pairs) {
         return -1;
     }
     for (int64_t j = start; j < end; ++j) {
-        if (w.lists.pair_a[j] != a || w.model.motion[w.lists.pair_b[j]] == DYNAMIC) {
+        if (w.lists.pair_a[j] != a) {
+            return -1;
+        }
+    }
+    return start;
+}
+
+// The first of the pairs of body a = pair k's a when a is held by immovable bodies alone:
+// dynamic, in two or more pairs, all with static or kinematic partners; -1 otherwise (or
+// without Settings::contact_patches).
+int64_t held_start(const StepContext& w, int64_t k, int64_t pairs) {
+    const int a = w.lists.pair_a[k];
+    if (!w.settings->contact_patches || w.model.motion[a] != DYNAMIC || w.pairs_of[a] < 2) {
+        return -1;
+    }
+    const int64_t start = first_own_pair(w, k, pairs);
+    for (int64_t j = start; start >= 0 && j < start + w.pairs_of[a]; ++j) {
+        if (w.model.motion[w.lists.pair_b[j]] == DYNAMIC) {
             return -1;
         }
     }
@@ -356,6 +387,141 @@ int resolve_held(StepContext& w, int64_t start, double dt) {
         count += found;
     }
     return applied + resolve_patches(w, a, {true, false}, wide, count, dt, CONTACT, 0.0);
+}
+
+// Is body b a partner that squeezes (squeeze.h): dynamic and articulated?
+bool squeezes(const BodyModel& model, int b) {
+    return model.motion[b] == DYNAMIC && model.articulated[b];
+}
+
+// The first of the pairs of body a = pair k's a when a is squeezed: dynamic, not articulated,
+// the a of all its pairs (first_own_pair), two or more of them with articulated partners
+// (squeezes) and none with another dynamic body; -1 otherwise (or without
+// Settings::contact_patches).
+int64_t squeeze_start(const StepContext& w, int64_t k, int64_t pairs) {
+    const int a = w.lists.pair_a[k];
+    const BodyModel& model = w.model;
+    if (!w.settings->contact_patches || model.motion[a] != DYNAMIC || model.articulated[a] ||
+        w.pairs_of[a] < 2) {
+        return -1;
+    }
+    const int64_t start = first_own_pair(w, k, pairs);
+    int squeezing = 0;
+    for (int64_t j = start; start >= 0 && j < start + w.pairs_of[a]; ++j) {
+        const int b = w.lists.pair_b[j];
+        if (model.motion[b] == DYNAMIC && !model.articulated[b]) {
+            return -1;
+        }
+        squeezing += squeezes(model, b);
+    }
+    return squeezing >= 2 ? start : -1;
+}
+
+// Fill `patch` and its centroid's relative velocity from patch seed of body a's contacts in
+// set; false if the patch does not touch (its least gap above CLOSED_GAP: a finger still
+// closing, whose approach is for the pair's own resolve to judge).
+bool squeeze_patch(const StepContext& w, const ContactSet& set, int a, int64_t seed,
+                   int64_t count, SqueezePatch& patch, Vec3& velocity) {
+    double least_gap = set.gap[seed];
+    Vec3 n = {0.0, 0.0, 0.0};
+    for (int64_t i = seed; i < count; ++i) {
+        if (set.group[i] == seed) {
+            least_gap = std::min(least_gap, set.gap[i]);
+            n = add(n, set.normal[i]);
+        }
+    }
+    if (least_gap > CLOSED_GAP) {
+        return false;
+    }
+    const int b = static_cast<int>(set.partner[seed]);
+    const Vec3 c = patch_centroid(set, seed, count);
+    double radius = 0.0;
+    int points = 0;
+    for (int64_t i = seed; i < count; ++i) {
+        if (set.group[i] == seed) {
+            radius += length(sub(set.point[i], c));
+            points += 1;
+        }
+    }
+    const double mu = std::sqrt(w.model.friction[a] * w.model.friction[b]);
+    patch = {b, sub(c, set.centre_a[seed]), sub(c, set.centre_b[seed]), scale(1.0 / length(n), n),
+             prior_impulse(w, set, seed, count), mu, radius / points, {0.0, 0.0, 0.0},
+             {0.0, 0.0, 0.0}};
+    velocity = relative_point_velocity(w.bodies, a, b, patch.lever_a, patch.lever_b);
+    return true;
+}
+
+// The contact stage's resolve of squeezed body a's pairs with its articulated partners (the
+// pairs from `start`; squeeze.h), at e = 0: all their patches at once where each touches and
+// the static solution holds (squeeze.h), with torsional friction about each patch's normal
+// where a spin is left (mu j_n r, as resolve_patches' single impulse); else pair by pair at
+// the pass's ramp_e, as the other pairs of the contact stage.
+int resolve_squeeze(StepContext& w, int64_t start, double dt, double ramp_e) {
+    const int a = w.lists.pair_a[start];
+    const int64_t end = start + w.pairs_of[a];
+    const ContactSet& wide = w.wide;
+    SqueezePatch patches[MAX_SQUEEZE_PATCHES];
+    Vec3 velocity[MAX_SQUEEZE_PATCHES];
+    int64_t seeds[MAX_SQUEEZE_PATCHES];
+    int n = 0;
+    int64_t count = 0;
+    bool together = true;
+    for (int64_t k = start; k < end && together; ++k) {
+        if (squeezes(w.model, w.lists.pair_b[k])) {
+            const int64_t found = gather_pair(w, {k, a, 0.0}, dt, {0.0, 0.0, 0.0}, wide, count);
+            together = count + found <= wide.depth.size;
+            count += found;
+        }
+    }
+    bool moving = false;
+    if (together) {
+        measure_approach(w, wide, a, count, dt);
+        for (int64_t seed = 0; seed < count && together; ++seed) {
+            if (wide.group[seed] >= 0) {
+                continue;
+            }
+            gather_patch(w.bodies, wide, seed, count);
+            together = n < MAX_SQUEEZE_PATCHES &&
+                       squeeze_patch(w, wide, a, seed, count, patches[n], velocity[n]);
+            if (together) {
+                const Vec3 spin = sub(w.bodies.angular_velocity[a],
+                                      w.bodies.angular_velocity[patches[n].partner]);
+                moving = moving || length(velocity[n]) > REST_SPEED ||
+                         std::fabs(dot(spin, patches[n].normal)) * patches[n].radius > REST_SPEED;
+                seeds[n++] = seed;
+            }
+        }
+    }
+    if (together && n >= 2 && !moving) {
+        return 0;
+    }
+    const bool solved =
+        together && n >= 2 && solve_squeeze(w.bodies, w.model, a, patches, velocity, n);
+    if (solved) {
+        for (int i = 0; i < n; ++i) {
+            const SqueezePatch& p = patches[i];
+            apply_pair(w.bodies, w.model, a, p.partner, {true, true}, p.impulse, p.spin,
+                       p.lever_a, p.lever_b);
+        }
+        // torsional friction where the solve left a spin (normals along several axes; after
+        // a shared spin impulse there is none left to stop)
+        for (int i = 0; i < n; ++i) {
+            const SqueezePatch& p = patches[i];
+            apply_with_spin_friction(w.bodies, w.model, a, p.partner, {true, true},
+                                     {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, p.lever_a, p.lever_b,
+                                     p.normal, p.mu * dot(p.impulse, p.normal) * p.radius);
+            book_impulse(w, wide, seeds[i], count, add(p.lever_a, wide.centre_a[seeds[i]]),
+                         p.impulse, p.spin, false, nullptr);
+        }
+        return n;
+    }
+    int applied = 0;
+    for (int64_t k = start; k < end; ++k) {
+        if (squeezes(w.model, w.lists.pair_b[k])) {
+            applied += resolve_pair(w, k, dt, {0.0, 0.0, 0.0}, CONTACT, ramp_e, {true, true});
+        }
+    }
+    return applied;
 }
 
 // w.pairs_of over the first `pairs` listed pairs; acting_only: those with an impulse.
@@ -414,21 +580,10 @@ int resolve_patches(StepContext& w, int a, Movable movable, const ContactSet& se
     }
     const BodyStates& s = w.bodies;
     const BodyModel& model = w.model;
-    // approach speed of every contact, kept in set.depth (negative: approaching), and the
-    // separation at the start of the step that it and the predicted depth imply
-    bool any_approaching = false;
-    for (int64_t i = 0; i < count; ++i) {
-        const Vec3 v = relative_velocity(w, set, a, static_cast<int>(set.partner[i]), i);
-        const double vn = dot(v, set.normal[i]);
-        set.gap[i] = -(set.depth[i] + dt * vn);
-        set.depth[i] = vn;
-        set.group[i] = -1;
-        any_approaching = any_approaching || vn < -REST_SPEED;
-    }
     // No contact approaching: every patch below would end at rest or unresolved with nothing
     // to apply (a patch's targets lie at or above v_n for e in [-1, 0], resolve_patch), so
     // the grouping is skipped: 11-20% of the resolves in the piles of 10 to 1000.
-    if (!any_approaching) {
+    if (!measure_approach(w, set, a, count, dt)) {
         return 0;
     }
     int applied = 0;
@@ -519,11 +674,18 @@ void resolve_world_contacts(StepContext& w, int64_t pairs, double dt, ImpulseMod
             for (int64_t k = 0; k < pairs; ++k) {
                 const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
                 const int64_t held = ramp ? held_start(w, k, pairs) : -1;
+                const int64_t squeezed = ramp && held < 0 ? squeeze_start(w, k, pairs) : -1;
                 if (ramp && (alone(w, a, b) || held >= 0) != (group == 1)) {
                     continue;
                 }
                 if (held >= 0) {  // the whole body at its first pair
                     applied += held == k ? resolve_held(w, k, dt) : 0;
+                    continue;
+                }
+                // a squeezed body's pairs with its squeezing partners at its first pair, its
+                // others (the table under a gripped cube) one by one
+                applied += squeezed == k ? resolve_squeeze(w, k, dt, ramp_e) : 0;
+                if (squeezed >= 0 && squeezes(w.model, b)) {
                     continue;
                 }
                 applied += resolve_pair(w, k, dt, lookahead, mode, ramp_e,

@@ -20,8 +20,9 @@
 // (resolve_patches): against an immovable partner by the wrench of patch.h, and against a
 // movable one too with Settings::contact_patches, otherwise by one impulse at its centroid;
 // with contact_patches the contact stage resolves a body touching only static and kinematic
-// bodies against all of them at once. Shock propagation combines a body's contacts with all
-// its frozen supports into such patches. Coulomb's limit applies to each pair's impulse over
+// bodies against all of them at once, and a body squeezed between articulated bodies (a cube
+// between a gripper's fingers) its pairs with them at once (squeeze.h). Shock propagation
+// combines a body's contacts with all its frozen supports into such patches. Coulomb's limit applies to each pair's impulse over
 // the whole step (StepContext::pair_impulse).
 #pragma once
 
