@@ -466,9 +466,13 @@ int resolve_squeeze(StepContext& w, int64_t start, double dt, double ramp_e) {
     int n = 0;
     int64_t count = 0;
     bool together = true;
+    // contacts up to GRAPH_MARGIN apart at the prediction, as shock propagation's supports:
+    // once resolved, a pad's contacts lie at depth 0 there give or take round-off, and a pad
+    // with none would send the body back to the pairs' own resolves
     for (int64_t k = start; k < end && together; ++k) {
         if (squeezes(w.model, w.lists.pair_b[k])) {
-            const int64_t found = gather_pair(w, {k, a, 0.0}, dt, {0.0, 0.0, 0.0}, wide, count);
+            const int64_t found =
+                gather_pair(w, {k, a, -GRAPH_MARGIN}, dt, {0.0, 0.0, 0.0}, wide, count);
             together = count + found <= wide.depth.size;
             count += found;
         }
