@@ -111,6 +111,7 @@ class ParallelGripper(FloatingEffector):
         self.fingers = self.carried
         self.joints = np.array([next(j.index for j in world.scene.joints if j.body_a == finger)
                                 for finger in self.fingers.tolist()], dtype=np.int64)
+        self.first_joint = int(self.joints[0])
         self.all_worlds = np.arange(self.num_worlds, dtype=np.int64)
         self.motor_speeds = world.core.joint_motor_speed
         """(B, J) m/s: the core's motor targets, written in place (``command``)."""
@@ -149,24 +150,28 @@ class ParallelGripper(FloatingEffector):
         over ``FINGER_SPEED``: > 0 opens, < 0 closes)."""
         held, width = self.grasp(slice(None))
         closing = self.idle if grips is None else -0.5 * FINGER_SPEED * grips
-        pressing = (closing > 0.0) & (held >= 0)
+        pressing = closing > 0.0
+        pressing &= held >= 0
         # the force limit takes each finger as the box it sweeps this step: its travel inward
-        # (outward where < 0) within what is left of it, none while it presses (np.clip's
-        # bounds by np.maximum and np.minimum: the same values, without its Python wrapper)
-        travel = np.minimum(np.maximum(closing * self.step_time, -0.5 * (MAX_OPENING - width)),
-                            0.5 * width)
+        # (outward where < 0) within what is left of it, none while it presses. The bounds
+        # are np.clip's, applied in place: this method is a large share of an env step, and
+        # numpy's calls on arrays of one world cost more than their arithmetic
+        travel = closing * self.step_time
+        np.maximum(travel, -0.5 * (MAX_OPENING - width), out=travel)
+        np.minimum(travel, 0.5 * width, out=travel)
         travel[pressing] = 0.0
         sweeps = self.sweeps
         sweeps[:, 0, 1] = travel
         sweeps[:, 1, 1] = -travel
         self.move(motions, held, sweeps)
-        speeds = np.where(pressing, self.press_speed, closing)
+        speeds = closing.copy()
+        speeds[pressing] = self.press_speed
         # the motors' targets written as World.set_joint_motor would, without its checks (the
         # commands are finite and clipped); a world whose targets change is woken, as that
         # call wakes it: sleeping cannot see a motor's target
         targets = self.motor_speeds
-        changed = targets[:, self.joints[0]] != speeds
-        if changed.any():
+        changed = targets[:, self.first_joint] != speeds
+        if np.count_nonzero(changed):
             targets[:, self.joints] = speeds[:, None]
             for world in np.flatnonzero(changed).tolist():
                 self.world.core.forget(world, world + 1)

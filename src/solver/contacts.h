@@ -18,7 +18,9 @@
 // bodies' turns move them by less than a margin times the turn. When a pair's bodies have
 // moved further than the margin allows since its detection (a collision reversed a body, a
 // stack above pushed harder), the pair is detected again at the current prediction before the
-// pass uses it, so no contact the narrow phase would find is missed. With
+// pass uses it, so no contact the narrow phase would find is missed. Motion along the shared
+// normal of a pair with an articulated body does not count (contacts.cpp, along_normal_exempt:
+// a finger pushed into the cube it presses by its motor, and back by the contact stage). With
 // Settings::detect_every_pass the narrow phase runs in every pass instead (the original GBF
 // formulation, kept to measure the difference). A pair whose bodies move far relative to each
 // other in a step is found where they meet instead, its depths carried on to the end of the

@@ -142,9 +142,9 @@ Flow take_pairs(StepContext& w, int64_t count) {
 }
 
 // The step's contacts, found by the first impulse stage that needs them (contacts.h), at
-// the poses it predicts: the collision stage's (old velocities, dt^2 g ahead) or the contact
-// and shock stages' (new velocities), which are the same poses until an impulse or a force
-// acts. Found once per step (take_pairs clears the flag).
+// the poses it predicts: the collision stage's (old velocities, dt^2 g ahead) or the joint
+// velocity, contact and shock stages' (new velocities), which are the same poses until an
+// impulse or a force acts. Found once per step (take_pairs clears the flag).
 void find_contacts(StepContext& w, Vec3 lookahead) {
     if (!*w.contacts.detected) {
         detect_contacts(w, *w.rest.awake_pairs, w.dt, lookahead);
