@@ -52,6 +52,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import yaml
+from rigid_gym._core import set_num_threads
 from stable_baselines3.common.callbacks import BaseCallback, CallbackList
 from stable_baselines3.common.vec_env import VecCheckNan, VecMonitor
 
@@ -149,6 +150,17 @@ def model_kwargs(settings: dict, algo: str, overrides: dict | None = None) -> di
     return kwargs
 
 
+def use_threads(threads: int) -> None:
+    """Train on ``threads`` threads: PyTorch's, and the solver's pool, which otherwise shares a
+    large batch of copies (the batch learner's 256) out over every core the process may use
+    (results are bit for bit the same either way). A run's ``cpu_s`` then counts one core for
+    ``threads=1`` but for JAX's own threads (one where XLA_FLAGS says so: agents/table.py)."""
+    import torch
+
+    torch.set_num_threads(threads)
+    set_num_threads(threads)
+
+
 def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None, seed: int = 0,
           n_envs: int | None = None, out: str | Path = "runs", eval_freq: int | None = None,
           eval_episodes: int = 20, checkpoint_freq: int = 0, progress_bar: bool = False,
@@ -168,7 +180,7 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     final_episodes: the final evaluation's episodes (0: none, and no result file); results:
     a folder that also gets the result file, as ``<run_name>.json``. checkpoint_freq: env
     steps between checkpoints (0: none; with it, the end of training is one too). threads:
-    PyTorch's CPU threads. overrides: algorithm arguments that replace those of
+    PyTorch's CPU threads and the solver's (``use_threads``). overrides: algorithm arguments that replace those of
     hyperparams.yml (e.g. learning_starts). demonstrations: scripted episodes put in the replay
     buffer before training (off-policy only; default: hyperparams.yml's ``demonstrations``,
     else 0), see ``add_demonstrations``; demo_dataset: the Minari dataset id they come from
@@ -189,7 +201,6 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     ``overrides`` replace the recipe's settings, ``resume`` is any true value (it goes on
     from checkpoints/latest.pt).
     """
-    import torch
 
     if obs_mode not in ("state", "pixels"):
         raise ValueError(f"train: obs_mode must be 'state' or 'pixels', got {obs_mode!r}")
@@ -216,7 +227,7 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
                         ("checkpoint_freq", checkpoint_freq),
                         ("final_episodes", final_episodes)):
         _count(value, name, 0)
-    torch.set_num_threads(_count(threads, "threads", 1))
+    use_threads(_count(threads, "threads", 1))
     demonstrations = _count(demonstrations if demonstrations is not None
                             else settings.get("demonstrations", 0), "demonstrations", 0)
     if demonstrations and algo == "ppo":
@@ -286,7 +297,6 @@ def train_pixels(env_id: str, algo: str, *, timesteps: int | None, seed: int,
     drq: ``rigid_gym.agents.pixel_sac.train_pixel_sac``) with the entry's settings under
     ``algos: {algo: {algo: ...}}``, ``overrides`` replacing them; ``timesteps``: env steps,
     rounded up to whole iterations (distill) or whole episodes of the envs (drq)."""
-    import torch
 
     settings = load_hyperparams(env_id, algo)
     if algo not in settings:
@@ -297,7 +307,7 @@ def train_pixels(env_id: str, algo: str, *, timesteps: int | None, seed: int,
     recipe = {**settings[algo], **(overrides or {})}
     if timesteps is not None:
         timesteps = _count(timesteps, "timesteps", 1)
-    torch.set_num_threads(_count(threads, "threads", 1))
+    use_threads(_count(threads, "threads", 1))
     folder = run_directory(out, env_id, algo, _count(seed, "seed", 0))
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "result.json").unlink(missing_ok=True)  # a result only once the run finished
