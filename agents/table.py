@@ -27,9 +27,12 @@ RECIPES = {
     "throw": [("rigid_gym/Throw-v0", "sac"), ("rigid_gym/Throw-v0", "ppo")],
     "stack": [("rigid_gym/Stack-v0", "bc_sac"), ("rigid_gym/Stack-v0", "sac"),
               ("rigid_gym/Stack-v0", "ppo")],
+    **{task.lower(): [(f"rigid_gym/{task}-v0", "sac"), (f"rigid_gym/{task}-v0", "ppo")]
+       for task in ("Reach", "PickAndPlace", "Slide", "Flip", "Insert")},
+    "tower": [("rigid_gym/Tower-v0", "sac"), ("rigid_gym/Tower-v0", "ppo")],
 }
 """task -> its (env id, algo) recipes in the table (hyperparams.yml: the entry, or its
-``algos``): SAC + HER (Push, Throw with demonstrations, Stack without), Stack's
+``algos``): SAC + HER (Push and Throw with demonstrations, the others without), Stack's
 behaviour-cloning recipe, and PPO on the shaped reward."""
 PACE = {
     ("rigid_gym/Push-v0", "sac"): 767,
@@ -39,16 +42,25 @@ PACE = {
     ("rigid_gym/Push-v0", "ppo"): 7759,
     ("rigid_gym/Throw-v0", "ppo"): 2064,
     ("rigid_gym/Stack-v0", "ppo"): 1814,
+    ("rigid_gym/Reach-v0", "sac"): 250,
 }
 """Env steps per wall second of each recipe, for the dry run's estimates: the median over
 the three seeds in agents/results of env_steps / wall_s (evaluations, and making the
 demonstrations, included), two runs at a time on the 2-core Intel Xeon VM (Push's PPO: one
-at a time, the machine shared with other work)."""
+at a time, the machine shared with other work). Recipes not run yet take their task's
+nearest kin's pace (``pace``)."""
 ONE_THREAD = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
               "XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1",
               "RIGID_GYM_NUM_THREADS": "1"}
 """The environment of every run: one thread for PyTorch, numpy's BLAS, JAX and the solver's
 batch (whose pool would otherwise share large batches over the cores)."""
+
+
+def pace(env_id: str, algo: str) -> float:
+    """The env steps per wall second of a recipe (``PACE``), else of the same algo on Stack
+    (several cubes) for Tower, or on Push (one object) for the other tasks."""
+    kin = "rigid_gym/Stack-v0" if "Tower" in env_id else "rigid_gym/Push-v0"
+    return PACE.get((env_id, algo), PACE.get((kin, algo), PACE[(kin, "sac")]))
 
 
 def plan(tasks: list[str], algos: list[str] | None, seeds: list[int], runs: Path,
@@ -76,7 +88,7 @@ def plan(tasks: list[str], algos: list[str] | None, seeds: list[int], runs: Path
                 left = 0 if state == "done" else steps - done_steps
                 entries.append({"env_id": env_id, "algo": algo, "seed": seed, "name": name,
                                 "state": state, "steps": steps,
-                                "estimate_s": left / PACE[(env_id, algo)]})
+                                "estimate_s": left / pace(env_id, algo)})
     return entries
 
 
@@ -144,7 +156,7 @@ def main(argv: list[str] | None = None) -> int:
     from .results import RESULTS
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--tasks", default="push,throw,stack",
+    parser.add_argument("--tasks", default=",".join(RECIPES),
                         help=f"comma-separated, of {', '.join(RECIPES)} (default all)")
     parser.add_argument("--algos", default=None,
                         help="comma-separated algos to keep (sac, bc_sac, ppo; default all)")
