@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import statistics
 import subprocess
 import sys
 import time
@@ -36,19 +37,13 @@ RECIPES = {
 behaviour-cloning recipe, and PPO on the shaped reward."""
 PACE = {
     ("rigid_gym/Push-v0", "sac"): 767,
-    ("rigid_gym/Throw-v0", "sac"): 720,
-    ("rigid_gym/Stack-v0", "bc_sac"): 113,
+    ("rigid_gym/Push-v0", "ppo"): 7754,
     ("rigid_gym/Stack-v0", "sac"): 329,
-    ("rigid_gym/Push-v0", "ppo"): 7759,
-    ("rigid_gym/Throw-v0", "ppo"): 2064,
     ("rigid_gym/Stack-v0", "ppo"): 1814,
-    ("rigid_gym/Reach-v0", "sac"): 250,
 }
-"""Env steps per wall second of each recipe, for the dry run's estimates: the median over
-the three seeds in agents/results of env_steps / wall_s (evaluations, and making the
-demonstrations, included), two runs at a time on the 2-core Intel Xeon VM (Push's PPO: one
-at a time, the machine shared with other work). Recipes not run yet take their task's
-nearest kin's pace (``pace``)."""
+"""Env steps per wall second of the kin recipes ``pace`` falls back on where the results
+folder has none of a recipe (the medians of agents/results: two runs at a time on the
+2-core Intel Xeon VM, evaluations included)."""
 ONE_THREAD = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
               "XLA_FLAGS": "--xla_cpu_multi_thread_eigen=false intra_op_parallelism_threads=1",
               "RIGID_GYM_NUM_THREADS": "1"}
@@ -56,11 +51,24 @@ ONE_THREAD = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THRE
 batch (whose pool would otherwise share large batches over the cores)."""
 
 
-def pace(env_id: str, algo: str) -> float:
-    """The env steps per wall second of a recipe (``PACE``), else of the same algo on Stack
-    (several cubes) for Tower, or on Push (one object) for the other tasks."""
+def pace(env_id: str, algo: str, results: Path) -> float:
+    """Env steps per wall second of a recipe, for the dry run's estimates: the median of
+    env_steps / wall_s over its result files in ``results`` (evaluations, and making the
+    demonstrations, included); without any, of the same algo on Stack (several cubes) for
+    Tower or on Push (one object) for the other tasks, there or in ``PACE``."""
+    from .results import load_results
+
+    done = load_results(results) if results.is_dir() else []
+
+    def measured(env: str) -> list[float]:
+        return [r["env_steps"] / r["wall_s"] for r in done
+                if (r.get("env_id"), r.get("algo")) == (env, algo) and r.get("wall_s")]
+
     kin = "rigid_gym/Stack-v0" if "Tower" in env_id else "rigid_gym/Push-v0"
-    return PACE.get((env_id, algo), PACE.get((kin, algo), PACE[(kin, "sac")]))
+    rates = measured(env_id) or measured(kin)
+    if rates:
+        return statistics.median(rates)
+    return PACE.get((kin, algo), PACE[(kin, "sac")])
 
 
 def plan(tasks: list[str], algos: list[str] | None, seeds: list[int], runs: Path,
@@ -88,7 +96,7 @@ def plan(tasks: list[str], algos: list[str] | None, seeds: list[int], runs: Path
                 left = 0 if state == "done" else steps - done_steps
                 entries.append({"env_id": env_id, "algo": algo, "seed": seed, "name": name,
                                 "state": state, "steps": steps,
-                                "estimate_s": left / pace(env_id, algo)})
+                                "estimate_s": left / pace(env_id, algo, results)})
     return entries
 
 

@@ -479,6 +479,24 @@ def test_the_queue_plans_done_unfinished_and_new_runs(tmp_path, capsys):
     assert "unknown task(s) ['nope']" in capsys.readouterr().err
 
 
+def test_the_plan_takes_its_pace_from_the_results_or_a_kin_recipe(tmp_path):
+    """A recipe's estimate divides its steps by the median pace of its own result files, or,
+    with none, by that of its kin's (Stack's for Tower)."""
+    from rigid_gym.agents.table import plan
+
+    results = tmp_path / "results"
+    results.mkdir()
+    for seed, wall in enumerate((10.0, 20.0, 40.0)):  # 100, 50, 25 env steps/s
+        (results / f"Stack-sac-seed{seed}.json").write_text(json.dumps(
+            {"env_id": "rigid_gym/Stack-v0", "algo": "sac", "env_steps": 1000, "wall_s": wall}))
+    (tower,) = plan(["tower"], ["sac"], [0], tmp_path / "runs", results)
+    assert tower["estimate_s"] == pytest.approx(tower["steps"] / 50.0)
+    (results / "Tower-sac-seed1.json").write_text(json.dumps(
+        {"env_id": "rigid_gym/Tower-v0", "algo": "sac", "env_steps": 500, "wall_s": 1.0}))
+    (tower,) = plan(["tower"], ["sac"], [0], tmp_path / "runs", results)
+    assert tower["estimate_s"] == pytest.approx(tower["steps"] / 500.0)
+
+
 def test_a_model_saved_by_sbx_without_sbx_installed_says_which_extra_it_needs(monkeypatch):
     from rigid_gym.agents import algorithms
 
