@@ -33,7 +33,7 @@ RECIPES = {
     "tower": [("rigid_gym/Tower-v0", "sac"), ("rigid_gym/Tower-v0", "ppo")],
 }
 """task -> its (env id, algo) recipes in the table (hyperparams.yml: the entry, or its
-``algos``): SAC + HER (Push and Throw with demonstrations, the others without), Stack's
+``algos``): SAC + HER (Throw with demonstrations, the others without), Stack's
 behaviour-cloning recipe, and PPO on the shaped reward."""
 PACE = {
     ("rigid_gym/Push-v0", "sac"): 767,
