@@ -51,14 +51,11 @@ ONE_THREAD = {"OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "OPENBLAS_NUM_THRE
 batch (whose pool would otherwise share large batches over the cores)."""
 
 
-def pace(env_id: str, algo: str, results: Path) -> float:
+def pace(env_id: str, algo: str, done: list[dict]) -> float:
     """Env steps per wall second of a recipe, for the dry run's estimates: the median of
-    env_steps / wall_s over its result files in ``results`` (evaluations, and making the
+    env_steps / wall_s over its finished runs' results ``done`` (evaluations, and making the
     demonstrations, included); without any, of the same algo on Stack (several cubes) for
     Tower or on Push (one object) for the other tasks, there or in ``PACE``."""
-    from .results import load_results
-
-    done = load_results(results) if results.is_dir() else []
 
     def measured(env: str) -> list[float]:
         return [r["env_steps"] / r["wall_s"] for r in done
@@ -76,11 +73,13 @@ def plan(tasks: list[str], algos: list[str] | None, seeds: list[int], runs: Path
     """Every (env id, algo, seed) of ``tasks`` (only ``algos`` where given), by seed then
     task: {"env_id", "algo", "seed", "name", "state" (done, resume at N, new), "steps",
     "estimate_s"}."""
+    from .results import load_results
     from .train import latest_checkpoint, load_hyperparams, run_name
 
     unknown = [t for t in tasks if t not in RECIPES]
     if unknown:
         raise ValueError(f"table: unknown task(s) {unknown}; known: {sorted(RECIPES)}")
+    finished = load_results(results) if results.is_dir() else []
     entries = []
     for seed in seeds:
         for task in tasks:
@@ -96,7 +95,7 @@ def plan(tasks: list[str], algos: list[str] | None, seeds: list[int], runs: Path
                 left = 0 if state == "done" else steps - done_steps
                 entries.append({"env_id": env_id, "algo": algo, "seed": seed, "name": name,
                                 "state": state, "steps": steps,
-                                "estimate_s": left / pace(env_id, algo, results)})
+                                "estimate_s": left / pace(env_id, algo, finished)})
     return entries
 
 

@@ -126,6 +126,21 @@ int64_t tick(const Graph& graph) { return ++graph.clock[0]; }
 // Body i's velocity changed (graph.changed_at).
 void mark_changed(const Graph& graph, int i) { graph.changed_at[i] = tick(graph); }
 
+// After a resolve of bodies a and b (b < 0: a alone) that applied `took` impulses: their
+// velocities changed, or the resolve is quiet from now (quiet_since, its slot of
+// graph.quiet_since or graph.pair_quiet_since).
+void note_resolve(const Graph& graph, int took, int64_t& quiet_since, int a, int b) {
+    if (took > 0) {
+        mark_changed(graph, a);
+        if (b >= 0) {
+            mark_changed(graph, b);
+        }
+        quiet_since = -1;
+    } else {
+        quiet_since = tick(graph);
+    }
+}
+
 // Would resolving node `node` (of level `current`) against its frozen supports apply nothing
 // for sure? So when its last such resolve applied nothing (graph.quiet_since) and neither it
 // nor a frozen dynamic support of it has changed its velocity since: a resolve is a function
@@ -162,12 +177,7 @@ int resolve_level_supports(StepContext& w, int64_t start, int64_t end, int64_t c
         }
         const int body = static_cast<int>(graph.nodes[node]);
         const int took = resolve_supported_body(w, node, current, dt, reactions);
-        if (took > 0) {
-            mark_changed(graph, body);
-            graph.quiet_since[body] = -1;
-        } else {
-            graph.quiet_since[body] = tick(graph);
-        }
+        note_resolve(graph, took, graph.quiet_since[body], body, -1);
         applied += took;
     }
     return applied;
@@ -187,13 +197,7 @@ int resolve_level_pairs(StepContext& w, int64_t current, double dt) {
             continue;
         }
         const int took = resolve_pair(w, k, dt, NO_LOOKAHEAD, SHOCK, 0.0, {true, true});
-        if (took > 0) {
-            mark_changed(graph, a);
-            mark_changed(graph, b);
-            graph.pair_quiet_since[k] = -1;
-        } else {
-            graph.pair_quiet_since[k] = tick(graph);
-        }
+        note_resolve(graph, took, graph.pair_quiet_since[k], a, b);
         applied += took;
     }
     return applied;

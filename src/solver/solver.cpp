@@ -329,46 +329,60 @@ bool alone(const StepContext& w, int a, int b) {
            (w.model.motion[b] != DYNAMIC || w.pairs_of[b] == 1);
 }
 
-// The first of the pairs of body a = pair k's a when all of them (w.pairs_of[a]) have a as
-// their a: pairs are listed sorted by (a, b) (broad_phase.h), so they follow each other from
-// the first; -1 otherwise. A dynamic body is the a of its pairs with static and kinematic
-// bodies, and of those with dynamic bodies listed after it.
-int64_t first_own_pair(const StepContext& w, int64_t k, int64_t pairs) {
+// How the contact stage resolves the pairs of body a = pair k's a (with
+// Settings::contact_patches): HELD, all at once, when a is dynamic, in two or more pairs, all
+// with static or kinematic partners; SQUEEZED, its pairs with articulated partners at once
+// (squeeze.h), when a is dynamic, not articulated, in two or more pairs with articulated
+// partners and in none with another dynamic body; else ONE_BY_ONE. Both need a to be the a of
+// all its pairs (w.pairs_of[a]): pairs are listed sorted by (a, b) (broad_phase.h), so they
+// follow each other from the first, `start`. A dynamic body is the a of its pairs with static
+// and kinematic bodies, and of those with dynamic bodies listed after it.
+enum Resolve { ONE_BY_ONE, HELD, SQUEEZED };
+
+struct OwnPairs {
+    Resolve resolve;
+    int64_t start;  // the body's first pair (HELD, SQUEEZED)
+};
+
+// Is body b a partner that squeezes (squeeze.h): dynamic and articulated?
+bool squeezes(const BodyModel& model, int b) {
+    return model.motion[b] == DYNAMIC && model.articulated[b];
+}
+
+OwnPairs own_pairs(const StepContext& w, int64_t k, int64_t pairs) {
+    const OwnPairs one_by_one = {ONE_BY_ONE, -1};
     const int a = w.lists.pair_a[k];
+    const BodyModel& model = w.model;
+    const auto free_partner = [&](int b) {
+        return model.motion[b] == DYNAMIC && !model.articulated[b];
+    };
+    if (!w.settings->contact_patches || model.motion[a] != DYNAMIC || w.pairs_of[a] < 2 ||
+        free_partner(w.lists.pair_b[k])) {
+        return one_by_one;
+    }
     int64_t start = k;
     while (start > 0 && w.lists.pair_a[start - 1] == a) {
         start -= 1;
     }
     const int64_t end = start + w.pairs_of[a];
     if (end > pairs) {
-        return -1;
+        return one_by_one;
     }
+    int squeezing = 0;
     for (int64_t j = start; j < end; ++j) {
-        if (w.lists.pair_a[j] != a) {
-            return -1;
+        const int b = w.lists.pair_b[j];
+        if (w.lists.pair_a[j] != a || free_partner(b)) {
+            return one_by_one;
         }
+        squeezing += squeezes(model, b);
     }
-    return start;
+    if (squeezing == 0) {
+        return {HELD, start};
+    }
+    return squeezing >= 2 && !model.articulated[a] ? OwnPairs{SQUEEZED, start} : one_by_one;
 }
 
-// The first of the pairs of body a = pair k's a when a is held by immovable bodies alone:
-// dynamic, in two or more pairs, all with static or kinematic partners; -1 otherwise (or
-// without Settings::contact_patches).
-int64_t held_start(const StepContext& w, int64_t k, int64_t pairs) {
-    const int a = w.lists.pair_a[k];
-    if (!w.settings->contact_patches || w.model.motion[a] != DYNAMIC || w.pairs_of[a] < 2) {
-        return -1;
-    }
-    const int64_t start = first_own_pair(w, k, pairs);
-    for (int64_t j = start; start >= 0 && j < start + w.pairs_of[a]; ++j) {
-        if (w.model.motion[w.lists.pair_b[j]] == DYNAMIC) {
-            return -1;
-        }
-    }
-    return start;
-}
-
-// The contact stage's resolve of a held body (held_start): all its contacts at once, in
+// The contact stage's resolve of a held body (own_pairs): all its contacts at once, in
 // w.wide, at e = 0, as shock propagation resolves a body against its frozen supports. Pair
 // by pair, a plank on two bars was pushed up at one bar by the impulse that stopped it at
 // the other, and rocked for good (3e-5 m/s): the two patches' impulses disturb each other.
@@ -387,34 +401,6 @@ int resolve_held(StepContext& w, int64_t start, double dt) {
         count += found;
     }
     return applied + resolve_patches(w, a, {true, false}, wide, count, dt, CONTACT, 0.0);
-}
-
-// Is body b a partner that squeezes (squeeze.h): dynamic and articulated?
-bool squeezes(const BodyModel& model, int b) {
-    return model.motion[b] == DYNAMIC && model.articulated[b];
-}
-
-// The first of the pairs of body a = pair k's a when a is squeezed: dynamic, not articulated,
-// the a of all its pairs (first_own_pair), two or more of them with articulated partners
-// (squeezes) and none with another dynamic body; -1 otherwise (or without
-// Settings::contact_patches).
-int64_t squeeze_start(const StepContext& w, int64_t k, int64_t pairs) {
-    const int a = w.lists.pair_a[k];
-    const BodyModel& model = w.model;
-    if (!w.settings->contact_patches || model.motion[a] != DYNAMIC || model.articulated[a] ||
-        w.pairs_of[a] < 2) {
-        return -1;
-    }
-    const int64_t start = first_own_pair(w, k, pairs);
-    int squeezing = 0;
-    for (int64_t j = start; start >= 0 && j < start + w.pairs_of[a]; ++j) {
-        const int b = w.lists.pair_b[j];
-        if (model.motion[b] == DYNAMIC && !model.articulated[b]) {
-            return -1;
-        }
-        squeezing += squeezes(model, b);
-    }
-    return squeezing >= 2 ? start : -1;
 }
 
 // Fill `patch` and its centroid's relative velocity from patch seed of body a's contacts in
@@ -677,20 +663,21 @@ void resolve_world_contacts(StepContext& w, int64_t pairs, double dt, ImpulseMod
             int applied = 0;
             for (int64_t k = 0; k < pairs; ++k) {
                 const int a = w.lists.pair_a[k], b = w.lists.pair_b[k];
-                const int64_t held = ramp ? held_start(w, k, pairs) : -1;
-                const int64_t squeezed = ramp && held < 0 ? squeeze_start(w, k, pairs) : -1;
-                if (ramp && (alone(w, a, b) || held >= 0) != (group == 1)) {
+                const OwnPairs own = ramp ? own_pairs(w, k, pairs) : OwnPairs{ONE_BY_ONE, -1};
+                if (ramp && (alone(w, a, b) || own.resolve == HELD) != (group == 1)) {
                     continue;
                 }
-                if (held >= 0) {  // the whole body at its first pair
-                    applied += held == k ? resolve_held(w, k, dt) : 0;
+                if (own.resolve == HELD) {  // the whole body at its first pair
+                    applied += own.start == k ? resolve_held(w, k, dt) : 0;
                     continue;
                 }
                 // a squeezed body's pairs with its squeezing partners at its first pair, its
                 // others (the table under a gripped cube) one by one
-                applied += squeezed == k ? resolve_squeeze(w, k, dt, ramp_e) : 0;
-                if (squeezed >= 0 && squeezes(w.model, b)) {
-                    continue;
+                if (own.resolve == SQUEEZED) {
+                    applied += own.start == k ? resolve_squeeze(w, k, dt, ramp_e) : 0;
+                    if (squeezes(w.model, b)) {
+                        continue;
+                    }
                 }
                 applied += resolve_pair(w, k, dt, lookahead, mode, ramp_e,
                                         {w.model.motion[a] == DYNAMIC, w.model.motion[b] == DYNAMIC});

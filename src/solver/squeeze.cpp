@@ -100,12 +100,11 @@ int static_system(const BodyStates& bodies, const BodyModel& model, int a,
         }
         if (i == 0) {
             const Vec3 wu = rotate(wa, u);
-            double partner = 0.0;
+            const double uc[3] = {u.x, u.y, u.z};
+            double partner = 0.0;  // u . (partner 0's spin per unit angular impulse about u)
             for (int r = 0; r < 3; ++r) {
-                const double ur = r == 0 ? u.x : r == 1 ? u.y : u.z;
                 for (int q = 0; q < 3; ++q) {
-                    const double uq = q == 0 ? u.x : q == 1 ? u.y : u.z;
-                    partner += ur * big[3 + r][3 + q] * uq;
+                    partner += uc[r] * big[3 + r][3 + q] * uc[q];
                 }
             }
             k[s][s] = dot(u, wu) + share * partner;
