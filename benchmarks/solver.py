@@ -13,6 +13,7 @@ cost of a phase, not a usable setting: a stack without shock propagation is not 
     python benchmarks/solver.py --quick    # 10-stack and small piles only
     python benchmarks/solver.py --timers   # what timing the stages costs (World(profile=True))
     python benchmarks/solver.py --passes   # the falling piles with fewer contact passes
+    python benchmarks/solver.py --resolves # ns per pair resolve in the impulse stages
 
 ``--timers`` steps one world of each of a free ball (the cheapest step there is), the 10-cube
 stack and a pile of 100 with its stage timers off and on in alternate rounds, and prints the
@@ -24,6 +25,12 @@ contact passes and at fewer, every count in turn in each round, and prints each 
 steps/s and its median speed-up over the default. Fewer passes change every trajectory in
 contact; the report (``rigid-gym report``) tells what they do to its errors. No pass at all
 is the floor that the rest of the step (detection, shock propagation, the updates) sets.
+
+``--resolves`` steps the pyramid and the piles of 10 and 100, settled and over the first
+second after their drop, with their stage timers on (``World.profile()``), and prints for the
+contact and shock stages the contact sets resolved per step (a pair's contacts, or in shock
+propagation a body's with all its frozen supports) and the stage's time per resolve: the cost
+of a pair resolve, the detection's share of its pair included.
 """
 
 import argparse
@@ -102,6 +109,41 @@ def pass_speed(rounds: int = 7) -> None:
         print(f"| {name} | " + " | ".join(cells) + " |")
 
 
+RESOLVE_STAGES = ("contact", "shock_propagation")
+"""The impulse stages whose resolves ``--resolves`` reports."""
+
+
+def resolve_cost(rounds: int = 5) -> None:
+    """Per scene and impulse stage: contact sets resolved per step and ns per resolve (the
+    median over ``rounds`` timings of 240 steps, stage timers on)."""
+    print("| scene | " + " | ".join(f"{stage}: resolves/step | ns/resolve"
+                                     for stage in RESOLVE_STAGES) + " |")
+    print("|---|" + "---:|---:|" * len(RESOLVE_STAGES))
+    scenes = (("55-box pyramid", pyramid(10), False), ("pile of 10", pile(10), False),
+              ("pile of 100", pile(100), False), ("pile of 10, falling", pile(10), True),
+              ("pile of 100, falling", pile(100), True))
+    for name, scene, falling in scenes:
+        world = rg.World(scene, dt=DT, profile=True)
+        if not falling:
+            world.step(480)
+        counts: dict[str, list[float]] = {stage: [] for stage in RESOLVE_STAGES}
+        costs: dict[str, list[float]] = {stage: [] for stage in RESOLVE_STAGES}
+        for _ in range(rounds):
+            if falling:
+                world.reset()
+            before = world.profile()
+            world.step(240)
+            after = world.profile()
+            for stage in RESOLVE_STAGES:
+                resolves = after[stage]["resolves"] - before[stage]["resolves"]
+                seconds = after[stage]["seconds"] - before[stage]["seconds"]
+                counts[stage].append(resolves / 240)
+                costs[stage].append(seconds / resolves * 1e9 if resolves else float("nan"))
+        cells = [f"{statistics.median(counts[s]):,.0f} | {statistics.median(costs[s]):,.0f}"
+                 for s in RESOLVE_STAGES]
+        print(f"| {name} | " + " | ".join(cells) + " |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="10-stack and small piles only")
@@ -109,7 +151,12 @@ def main() -> None:
                         help="what timing the stages costs (World(profile=True))")
     parser.add_argument("--passes", action="store_true",
                         help="the falling piles with fewer contact passes")
+    parser.add_argument("--resolves", action="store_true",
+                        help="ns per pair resolve in the contact and shock stages")
     args = parser.parse_args()
+    if args.resolves:
+        resolve_cost()
+        return
     if args.timers:
         timer_cost()
         return

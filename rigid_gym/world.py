@@ -515,7 +515,9 @@ class World:
     def profile(self) -> dict[str, dict]:
         """Per stage of the step, in step order (``rigid_gym._core.STAGES``, the names of
         ``SolverConfig.phases``): {"on": whether the config runs it in this scene, "seconds":
-        wall time spent in it (s) while ``profiling``, "calls": how many times it ran}, summed
+        wall time spent in it (s) while ``profiling``, "calls": how many times it ran,
+        "resolves": how many contact sets it resolved (a pair's contacts, or a body's with all
+        its supports: the unit of the impulse stages' work; 0 in the other stages)}, summed
         over every world and every step since the World was made (resets included). The step
         counts and times its stages itself (``src/solver/timers.h``); a batch's seconds add up
         its worlds' time on every thread. A stage's seconds are its own: the impulse stages run
@@ -530,7 +532,9 @@ class World:
         on = self.core.stages
         seconds = self.core.stage_seconds.sum(axis=0)
         calls = self.core.stage_calls.sum(axis=0)
-        return {name: {"on": on[k], "seconds": float(seconds[k]), "calls": int(calls[k])}
+        resolves = self.core.stage_resolves.sum(axis=0)
+        return {name: {"on": on[k], "seconds": float(seconds[k]), "calls": int(calls[k]),
+                       "resolves": int(resolves[k])}
                 for k, name in enumerate(_core.STAGES)}
 
     def body_index(self, name: str) -> int:

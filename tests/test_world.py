@@ -243,6 +243,32 @@ def test_the_state_layout_is_the_cores():
         assert np.shares_memory(array, getattr(world.core, name)), name
 
 
+def test_profile_counts_the_contact_sets_each_impulse_stage_resolves():
+    """World.profile()'s resolves: the contact sets (a pair's contacts, or a body's with all
+    its frozen supports) each stage resolved. A box resting on the ground, kept awake, is a
+    pair alone: each step's contact stage resolves it twice (the pass that stops gravity's
+    approach, then one that applies nothing and ends the stage) and shock propagation once
+    against its frozen support. Two stacked boxes share the lower box, so the contact stage
+    runs its restitution ramp, every pass applying: 2 pairs x 10 passes a step. No other
+    stage resolves anything."""
+    scene = rg.Scene()
+    scene.add_ground()
+    scene.add_body(rg.Box((0.05, 0.05, 0.05)), mass=1.0, position=(0, 0, 0.05))
+    config = rg.SolverConfig.for_scene(scene, sleep=False)
+    alone = rg.World(scene, config=config)
+    alone.step(3)
+    resolves = {name: p["resolves"] for name, p in alone.profile().items()}
+    assert resolves == {name: {"contact": 6, "shock_propagation": 3}.get(name, 0)
+                        for name in STAGES}
+    scene.add_body(rg.Box((0.05, 0.05, 0.05)), mass=1.0, position=(0, 0, 0.15))
+    stacked = rg.World(scene, config=config)
+    stacked.step(240)
+    before = stacked.profile()
+    stacked.step(1)
+    after = stacked.profile()
+    assert after["contact"]["resolves"] - before["contact"]["resolves"] == 2 * config.contact_passes
+
+
 def test_profile_counts_skipped_and_repeated_stages():
     """Bodies in free flight, with no pair that could touch, skip the impulse stages, and so
     does a box asleep on the ground (its pair is not awake); once that box has slept through

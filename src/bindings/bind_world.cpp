@@ -142,6 +142,14 @@ void def_joint_view(Context& cls, const char* name, Array<double> JointBuffers::
     }, nb::rv_policy::reference, doc);
 }
 
+// A copy (B, len(STAGES)) of a per-world stage table (seconds, calls, resolves).
+template <typename T>
+nb::ndarray<nb::numpy, T> stage_table(const Batch& c, const Array<T>& rows) {
+    std::vector<T> values(rows.data(), rows.data() + rows.size());
+    return hand_over(std::move(values), {static_cast<size_t>(c.num_worlds()),
+                                         static_cast<size_t>(STAGE_COUNT)});
+}
+
 // A copy (B, J, 3) of per-world joint vectors.
 nb::ndarray<nb::numpy, double> joint_vectors(const Batch& c, const Array<Vec3>& rows) {
     const double* first = reinterpret_cast<const double*>(rows.data());
@@ -389,26 +397,19 @@ void bind_world(nb::module_& m) {
     cls.def_rw("timed", &Batch::timed,
                "Read the clock in every stage of every step, for stage_seconds (src/solver/timers.h).");
     cls.def_prop_ro(
-        "stage_seconds",
-        [](Batch& c) {
-            std::vector<double> seconds(c.stage_seconds.data(),
-                                        c.stage_seconds.data() + c.stage_seconds.size());
-            return hand_over(std::move(seconds), {static_cast<size_t>(c.num_worlds()),
-                                                  static_cast<size_t>(STAGE_COUNT)});
-        },
+        "stage_seconds", [](Batch& c) { return stage_table(c, c.stage_seconds); },
         nb::rv_policy::reference,
         "(B, len(STAGES)) s each world spent in each stage of its steps so far, while timed; "
         "a copy.");
     cls.def_prop_ro(
-        "stage_calls",
-        [](Batch& c) {
-            std::vector<int64_t> calls(c.stage_calls.data(),
-                                       c.stage_calls.data() + c.stage_calls.size());
-            return hand_over(std::move(calls), {static_cast<size_t>(c.num_worlds()),
-                                                static_cast<size_t>(STAGE_COUNT)});
-        },
+        "stage_calls", [](Batch& c) { return stage_table(c, c.stage_calls); },
         nb::rv_policy::reference,
         "(B, len(STAGES)) how many times each world ran each stage so far; a copy.");
+    cls.def_prop_ro(
+        "stage_resolves", [](Batch& c) { return stage_table(c, c.stage_resolves); },
+        nb::rv_policy::reference,
+        "(B, len(STAGES)) how many contact sets (a pair's contacts, or a body's with all its "
+        "supports) each world's stages resolved so far; a copy.");
     cls.def_prop_ro(
         "asleep",
         [](Batch& c) {

@@ -20,7 +20,9 @@ namespace rg {
     X(int64_t, source, c, 0)       /* the listed pair it came from */                      \
     X(double, orient, c, 0.0)      /* +1 if the resolved body is the pair's a, -1 if its b */ \
     X(Vec3, centre_a, c, Vec3{})   /* predicted centre of the resolved body: levers start here */ \
-    X(Vec3, centre_b, c, Vec3{})   /* predicted centre of the partner */
+    X(Vec3, centre_b, c, Vec3{})   /* predicted centre of the partner */                   \
+    X(int64_t, row, c, -1)         /* its row among its pair's kept contacts (contacts.h), */ \
+                                   /* -1 for one found in the pass */
 
 struct ContactSet {
     RG_CONTACT_SET_ROWS(RG_SPAN_FIELD)

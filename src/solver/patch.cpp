@@ -492,24 +492,16 @@ namespace {
 // The largest of |x|, |y|, |z|.
 double max_abs(Vec3 a) { return std::max(std::max(std::fabs(a.x), std::fabs(a.y)), std::fabs(a.z)); }
 
-// The patch seen from its centre: geometry, the rotations it constrains and the pair's
-// relative motion there.
-struct PatchFrame {
-    Vec3 c, n;         // geometric centroid and mean normal (unit) of the patch's points
-    Vec3 t1, t2;       // tangent basis
-    Vec3 edge;         // an edge's direction
-    double rho;        // m, the mean distance of the points from c
-    Vec3 d[3];         // the constrained rotations: tip axes first, spin about n last
-    int tips;          // 2 for a face, 1 for an edge
-    Vec3 ra, rb;       // m, c from each body's predicted centre
+// The patch seen from its centre: its geometry (patch_memo.h) and the pair's relative
+// motion there.
+struct PatchFrame : PatchGeometry {
     Vec3 v, w;         // relative velocity at c (m/s) and relative angular velocity (rad/s)
     double vn;         // v . n
 };
 
-// The frame of the patch whose contacts have group == seed; false for a single point (fewer
-// than two contacts, or all at one place).
-bool patch_frame(const BodyStates& bodies, int a, int b, const ContactSet& set, int64_t seed,
-                 int64_t count, PatchFrame& f) {
+// The geometry of the patch whose contacts have group == seed; false for a single point
+// (fewer than two contacts, or all at one place).
+bool patch_geometry(const ContactSet& set, int64_t seed, int64_t count, PatchGeometry& f) {
     Vec3 c = {0.0, 0.0, 0.0}, n = {0.0, 0.0, 0.0};
     int m = 0;
     for (int64_t i = seed; i < count; ++i) {
@@ -541,6 +533,32 @@ bool patch_frame(const BodyStates& bodies, int a, int b, const ContactSet& set, 
     f.d[f.tips] = f.n;
     f.ra = sub(f.c, set.centre_a[seed]);
     f.rb = sub(f.c, set.centre_b[seed]);
+    return true;
+}
+
+// The frame of the patch whose contacts have group == seed, its geometry from key's memo
+// where that holds these contacts (else found, and kept there); false for a single point.
+bool patch_frame(const BodyStates& bodies, int a, int b, const ContactSet& set, int64_t seed,
+                 int64_t count, const PatchKey& key, PatchFrame& f) {
+    PatchMemo* memo = key.memo;
+    if (memo != nullptr && memo->members == key.members && memo->movable == key.movable) {
+        if (memo->point) {
+            return false;
+        }
+        static_cast<PatchGeometry&>(f) = memo->geometry;
+    } else {
+        const bool patch = patch_geometry(set, seed, count, f);
+        if (memo != nullptr) {
+            *memo = PatchMemo{};
+            memo->members = key.members;
+            memo->movable = key.movable;
+            memo->point = !patch;
+            memo->geometry = f;
+        }
+        if (!patch) {
+            return false;
+        }
+    }
     f.v = relative_point_velocity(bodies, a, b, f.ra, f.rb);
     f.vn = dot(f.v, f.n);
     f.w = sub(bodies.angular_velocity[a], bodies.angular_velocity[b]);
@@ -569,12 +587,19 @@ bool short_of_target(const PairLevers& pair, const LeverReach& lever, const Cont
 // inside the patch. Returns APPLIED or UNRESOLVED (it would pull), or nothing where it is not
 // taken (a singular system, or a wrench that would slide): the sliding wrench is next.
 std::optional<PatchResult> static_wrench(const PairLevers& pair, const ContactSet& set, int64_t seed, int64_t count,
-                          const PatchFrame& f, const Matrix6& big, const Targets& target, double mu,
+                          const PatchFrame& f, PatchMemo& kept, const Targets& target, double mu,
                           Vec3 prior, bool lessen) {
     const Vec3 n = f.n, v = f.v;
-    Matrix6 system;
+    const int size = 3 + f.tips + 1;
+    if (!kept.has_factors) {
+        reduced_system(kept.matrix, f.d, f.tips + 1, kept.factors);
+        kept.solvable = factor_dense(kept.factors, size, kept.pivot, SINGULAR);
+        kept.has_factors = true;
+    }
+    if (!kept.solvable) {
+        return std::nullopt;
+    }
     double rhs[6], sol[6];
-    reduced_system(big, f.d, f.tips + 1, system);
     rhs[0] = -v.x + target.normal * n.x;
     rhs[1] = -v.y + target.normal * n.y;
     rhs[2] = -v.z + target.normal * n.z;
@@ -582,9 +607,7 @@ std::optional<PatchResult> static_wrench(const PairLevers& pair, const ContactSe
         const double spin = dot(f.w, f.d[k]);
         rhs[3 + k] = k == f.tips ? -spin : target.tip[k] - spin;
     }
-    if (!solve_dense(system, rhs, 3 + f.tips + 1, sol, SINGULAR)) {
-        return std::nullopt;
-    }
+    solve_factored(kept.factors, kept.pivot, size, rhs, sol);
     const Vec3 j = {sol[0], sol[1], sol[2]};
     const Vec3 mo = moment(f.d, sol, 3, f.tips + 1);
     const double mn = dot(mo, n);
@@ -651,10 +674,10 @@ PatchResult sliding_wrench(const PairLevers& pair, const ContactSet& set, int64_
 
 PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int a, int b,
                           Movable movable, const ContactSet& set, int64_t seed, int64_t count,
-                          double e, double mu, Vec3 prior, double dt, bool lessen) {
+                          double e, double mu, Vec3 prior, double dt, bool lessen, PatchKey key) {
     const PatchResult at_rest = {AT_REST, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, false};
     PatchFrame f;
-    if (!patch_frame(bodies, a, b, set, seed, count, f)) {
+    if (!patch_frame(bodies, a, b, set, seed, count, key, f)) {
         return {UNRESOLVED, {0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}, false};
     }
     if (patch_at_rest(f)) {
@@ -665,21 +688,25 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
     if (!short_of_target(pair, lever, set, seed, count, f, e, dt)) {
         return at_rest;
     }
-    Matrix6 big = {};
-    if (movable.a) {
-        add_wrench_matrix(bodies, model, a, f.ra, big);
-    }
-    if (movable.b) {
-        add_wrench_matrix(bodies, model, b, f.rb, big);
+    PatchMemo local;  // without a memo: this resolve's own
+    PatchMemo& kept = key.memo != nullptr ? *key.memo : local;
+    if (!kept.has_matrix) {
+        if (movable.a) {
+            add_wrench_matrix(bodies, model, a, f.ra, kept.matrix);
+        }
+        if (movable.b) {
+            add_wrench_matrix(bodies, model, b, f.rb, kept.matrix);
+        }
+        kept.has_matrix = true;
     }
     const Targets target = normal_targets(pair, lever, set, seed, count, f.c, f.n, f.t1, f.t2,
                                           f.edge, f.tips, f.d, f.vn, f.w, e, dt);
     if (mu > 0.0) {
-        if (const auto held = static_wrench(pair, set, seed, count, f, big, target, mu, prior, lessen)) {
+        if (const auto held = static_wrench(pair, set, seed, count, f, kept, target, mu, prior, lessen)) {
             return *held;
         }
     }
-    return sliding_wrench(pair, set, seed, count, f, big, target, mu, prior, lessen);
+    return sliding_wrench(pair, set, seed, count, f, kept.matrix, target, mu, prior, lessen);
 }
 
 }  // namespace rg

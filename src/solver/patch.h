@@ -27,6 +27,7 @@
 #include <cmath>
 
 #include "solver/contact_set.h"
+#include "solver/patch_memo.h"
 
 namespace rg {
 
@@ -89,9 +90,11 @@ struct Movable {
 // patch, prior + j, still presses (impulses accumulated over the step, clamped as a whole):
 // a pure moment that stops a body tipping on its support, which friction's reaction passed
 // on by shock propagation gives it (solver.h), needs j_n = 0 and got none otherwise.
+// key: where the patch's frame, matrix and factors are kept between passes (patch_memo.h).
 PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int a, int b,
                           Movable movable, const ContactSet& set, int64_t seed, int64_t count,
-                          double e, double mu, Vec3 prior, double dt, bool lessen);
+                          double e, double mu, Vec3 prior, double dt, bool lessen,
+                          PatchKey key = {});
 
 // (V_a + w_a x r_a) - (V_b + w_b x r_b).
 Vec3 relative_point_velocity(const BodyStates& bodies, int a, int b, Vec3 ra, Vec3 rb);

@@ -545,8 +545,39 @@ int resolve_pair(StepContext& w, int64_t k, double dt, Vec3 lookahead, ImpulseMo
     const int a = w.lists.pair_a[k];
     const ContactSet& set = w.scratch;
     const int64_t count = gather_pair(w, {k, a, 0.0}, dt, lookahead, set, 0);
-    return resolve_patches(w, a, movable, set, std::min(count, set.depth.size), dt, mode, ramp_e);
+    // the contact stage keeps a patch's frame, matrix and factors from pass to pass
+    // (patch_memo.h); an articulated body's matrix is its joints' (mobility.h), built anew
+    const int b = w.lists.pair_b[k];
+    const bool keep = mode == CONTACT && !w.model.articulated[a] && !w.model.articulated[b];
+    return resolve_patches(w, a, movable, set, std::min(count, set.depth.size), dt, mode, ramp_e,
+                           nullptr, keep ? &w.contacts.memo[k] : nullptr);
 }
+
+namespace {
+
+// The key of patch seed's memo: memo with the bits of the patch's rows among its pair's kept
+// contacts and of its movable bodies, or no memo where one of its contacts is not a kept row
+// (found in the pass).
+PatchKey patch_key(const ContactSet& set, int64_t seed, int64_t count, Movable movable,
+                   PatchMemo* memo) {
+    if (memo == nullptr) {
+        return {};
+    }
+    uint64_t members = 0;
+    for (int64_t i = seed; i < count; ++i) {
+        if (set.group[i] != seed) {
+            continue;
+        }
+        const int64_t row = set.row[i];
+        if (row < 0 || row >= 64) {
+            return {};
+        }
+        members |= uint64_t{1} << row;
+    }
+    return {memo, members, static_cast<uint8_t>((movable.a ? 1 : 0) | (movable.b ? 2 : 0))};
+}
+
+}  // namespace
 
 // The contacts are grouped into patches of similar normal and rigidly co-moving partners (a
 // face resting on a face is one patch). Against an immovable partner (static, kinematic, or
@@ -563,8 +594,11 @@ int resolve_pair(StepContext& w, int64_t k, double dt, Vec3 lookahead, ImpulseMo
 // over the whole step: the patch wrench is checked with what its pairs already transmitted
 // this step added, and every impulse applied is added there.
 int resolve_patches(StepContext& w, int a, Movable movable, const ContactSet& set, int64_t count,
-                    double dt, ImpulseMode mode, double ramp_e, int* reactions) {
+                    double dt, ImpulseMode mode, double ramp_e, int* reactions, PatchMemo* memo) {
     const bool frozen = mode == SHOCK && !movable.b;
+    if (w.timers.running >= 0) {
+        w.timers.resolves[w.timers.running] += 1;
+    }
     if (count == 0) {
         return 0;
     }
@@ -597,7 +631,8 @@ int resolve_patches(StepContext& w, int a, Movable movable, const ContactSet& se
             const Vec3 prior = prior_impulse(w, set, seed, count);
             const PatchResult result =
                 resolve_patch(s, model, a, b, movable, set, seed, count, e, mu, prior, dt,
-                              w.settings->patch_reactions && mode == SHOCK);
+                              w.settings->patch_reactions && mode == SHOCK,
+                              patch_key(set, seed, count, movable, memo));
             if (result.outcome == APPLIED) {
                 book_impulse(w, set, seed, count, patch_centroid(set, seed, count),
                              result.impulse, result.moment,
@@ -655,6 +690,9 @@ void resolve_world_contacts(StepContext& w, int64_t pairs, double dt, ImpulseMod
     const bool ramp = mode == CONTACT;
     if (ramp) {
         count_pairs_of_bodies(w, pairs);
+        for (int64_t k = 0; k < pairs; ++k) {
+            w.contacts.memo[k].members = 0;  // nothing kept from an earlier stage
+        }
     }
     for (int group = 0; group < (ramp ? 2 : 1); ++group) {  // ramped pairs, then those alone
         for (int p = 0; p < passes; ++p) {

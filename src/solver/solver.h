@@ -72,7 +72,10 @@ int resolve_pair(StepContext& w, int64_t k, double dt, Vec3 lookahead, ImpulseMo
 // Settings::patch_reactions, what a sliding patch wrench or a single impulse applied against
 // a frozen dynamic partner across gravity is held back for it reversed (w.reaction), and
 // *reactions counts how often (the caller applies them and resolves the levels again).
+// memo: where set holds one pair's kept contacts (contacts.h), the pair's patch memo
+// (patch_memo.h), or nullptr to keep nothing.
 int resolve_patches(StepContext& w, int a, Movable movable, const ContactSet& set, int64_t count,
-                    double dt, ImpulseMode mode, double ramp_e, int* reactions = nullptr);
+                    double dt, ImpulseMode mode, double ramp_e, int* reactions = nullptr,
+                    PatchMemo* memo = nullptr);
 
 }  // namespace rg

@@ -28,6 +28,8 @@ inline double clock_seconds() {
 struct StageTimers {
     Span<double> seconds;     // (STAGE_COUNT,) s of wall time, while `timed`
     Span<int64_t> calls;      // (STAGE_COUNT,) runs of the stage
+    Span<int64_t> resolves;   // (STAGE_COUNT,) contact sets the stage resolved (resolve_patches:
+                              //   a pair's contacts, or a body's with all its supports)
     bool timed = false;       // read the clock
     int running = -1;         // the stage whose time is counting, -1: none
     double since = 0.0;       // s, when its time last started counting

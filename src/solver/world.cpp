@@ -252,6 +252,7 @@ Batch::Batch(int num_worlds, Geometry geometry, std::vector<int32_t> body_motion
     }
     stage_seconds.assign(b * STAGE_COUNT, 0.0);
     stage_calls.assign(b * STAGE_COUNT, 0);
+    stage_resolves.assign(b * STAGE_COUNT, 0);
     rest_.allocate_bodies(num_worlds_, n);
     contacts_.allocate_bodies(num_worlds_, n);
     joints.allocate(num_worlds_, n);  // none until set_joints
@@ -428,6 +429,7 @@ StepContext Batch::world(int w) {
     s.joints = joints.view(w);
     s.timers.seconds = world_rows(stage_seconds, w, STAGE_COUNT);
     s.timers.calls = world_rows(stage_calls, w, STAGE_COUNT);
+    s.timers.resolves = world_rows(stage_resolves, w, STAGE_COUNT);
     s.timers.timed = timed;
     return s;
 }

@@ -17,6 +17,7 @@
 #include "solver/contact_set.h"
 #include "collision/geometry.h"
 #include "solver/joint_rows.h"
+#include "solver/patch_memo.h"
 #include "solver/settings.h"
 #include "solver/sharing.h"
 #include "solver/stages.h"
@@ -115,7 +116,8 @@ struct Rest {
     X(Vec3, shift_a, p, Vec3{})   /* m, their predicted displacements then */                \
     X(Vec3, shift_b, p, Vec3{})                                                              \
     X(Vec3, turn_a, p, Vec3{})    /* rad, their predicted turns then */                      \
-    X(Vec3, turn_b, p, Vec3{})
+    X(Vec3, turn_b, p, Vec3{})                                                              \
+    X(PatchMemo, memo, p, PatchMemo{}) /* the contact stage's patch of the pair (patch_memo.h) */
 #define RG_CACHE_POOL_ROWS(X)                                                                \
     X(Vec3, point, q, Vec3{})     /* m, world, as found */                                   \
     X(Vec3, normal, q, Vec3{})    /* from b to a */                                          \
@@ -125,7 +127,12 @@ struct Rest {
 #define RG_CACHE_BODY_ROWS(X)                                                                \
     X(Pose, pose, n, Pose{})      /* predicted pose at the latest detection of every pair, */ \
                                   /* where posed[i] == *detections */                        \
-    X(int64_t, posed, n, -1)
+    X(int64_t, posed, n, -1)                                                                 \
+    X(Vec3, turn, n, Vec3{})      /* rad, a symmetric body's predicted turn (predicted_motion), */ \
+    X(Quat, turn_from, n, Quat{}) /* found from this orientation, */                         \
+    X(Vec3, turn_momentum, n, Vec3{}) /* this angular momentum, */                           \
+    X(double, turn_dt, n, 0.0)    /* this dt */                                              \
+    X(int64_t, turned_at, n, -1)  /* and in the step of this count of detections */
 #define RG_CACHE_COUNTS(X)                                                                   \
     X(int64_t, used, 1, 0)        /* rows in use */                                          \
     X(int64_t, needed, 1, 0)      /* rows this step asked for (grown to between steps) */    \
@@ -336,6 +343,7 @@ public:
     // Time per stage of every step so far (timers.h), per world: read by World.profile().
     Array<double> stage_seconds;    // (B, STAGE_COUNT) s
     Array<int64_t> stage_calls;     // (B, STAGE_COUNT)
+    Array<int64_t> stage_resolves;  // (B, STAGE_COUNT)
     // Joints (joint_rows.h): the model, and per world limits, motors, the last step's impulses.
     JointBuffers joints;
     bool timed = false;             // read the clock in every stage (timers.h)
