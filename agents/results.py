@@ -102,9 +102,19 @@ def table(results: list[dict]) -> str:
     lines += ["", (f"Final evaluation: deterministic policy, {', '.join(map(str, episodes))} "
                    f"episodes per seed on seeds apart from training's, of each run's selected "
                    f"checkpoint (the best on held-out validation seeds of its second half, "
-                   f"`train.finish`). Machine: {'; '.join(machines)}; one process of one "
-                   f"thread per run.")]
+                   f"`train.finish`). Machine: {'; '.join(machines)}; one process per run, "
+                   f"PyTorch's, XLA's and the solver's pools on one thread{threads_note(results)}.")]
     return "\n".join(lines)
+
+
+def threads_note(results: list[dict]) -> str:
+    """What the runs' CPU times say of the one-thread claim: the runs whose CPU time exceeds
+    their wall time (so some other thread of the process was busy too), and by how much."""
+    over = [r["cpu_s"] / r["wall_s"] - 1.0 for r in results if r["cpu_s"] > r["wall_s"] > 0.0]
+    if not over:
+        return ""
+    return (f" (CPU time above the wall time in {len(over)} of {len(results)} runs, by at "
+            f"most {max(over):.0%}: another thread of the process was busy too)")
 
 
 def band(runs: list[dict], key: str, scale: float = 1.0, points: int = 100):

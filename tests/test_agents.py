@@ -191,6 +191,19 @@ def test_the_curves_average_seeds_on_a_common_axis():
     np.testing.assert_allclose(mean, 0.75 * np.arange(1, 11) / 10)
 
 
+def test_the_table_says_where_a_run_used_more_than_one_thread():
+    """One thread per run is claimed as the CPU times show it: a run whose CPU time exceeds
+    its wall time is counted, with the largest excess."""
+    from rigid_gym.agents.results import table
+
+    runs = [synthetic_result("rigid_gym/Push-v0", "sac", "SAC + HER", s, 0.9, 100.0)
+            for s in range(3)]
+    assert table(runs).endswith("PyTorch's, XLA's and the solver's pools on one thread.")
+    runs[1]["cpu_s"] = 112.0
+    assert table(runs).endswith("(CPU time above the wall time in 1 of 3 runs, by at most 12%: "
+                                "another thread of the process was busy too).")
+
+
 def test_the_table_names_the_method():
     from rigid_gym.agents.results import method
 
