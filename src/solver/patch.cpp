@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <optional>
 
 #include "base/dense.h"
@@ -549,11 +550,12 @@ bool patch_frame(const BodyStates& bodies, int a, int b, const ContactSet& set, 
     } else {
         const bool patch = patch_geometry(set, seed, count, f);
         if (memo != nullptr) {
-            *memo = PatchMemo{};
             memo->members = key.members;
             memo->movable = key.movable;
             memo->point = !patch;
             memo->geometry = f;
+            memo->system.has_matrix = false;
+            memo->system.has_factors = false;
         }
         if (!patch) {
             return false;
@@ -587,7 +589,7 @@ bool short_of_target(const PairLevers& pair, const LeverReach& lever, const Cont
 // inside the patch. Returns APPLIED or UNRESOLVED (it would pull), or nothing where it is not
 // taken (a singular system, or a wrench that would slide): the sliding wrench is next.
 std::optional<PatchResult> static_wrench(const PairLevers& pair, const ContactSet& set, int64_t seed, int64_t count,
-                          const PatchFrame& f, PatchMemo& kept, const Targets& target, double mu,
+                          const PatchFrame& f, PatchSystem& kept, const Targets& target, double mu,
                           Vec3 prior, bool lessen) {
     const Vec3 n = f.n, v = f.v;
     const int size = 3 + f.tips + 1;
@@ -688,9 +690,12 @@ PatchResult resolve_patch(const BodyStates& bodies, const BodyModel& model, int 
     if (!short_of_target(pair, lever, set, seed, count, f, e, dt)) {
         return at_rest;
     }
-    PatchMemo local;  // without a memo: this resolve's own
-    PatchMemo& kept = key.memo != nullptr ? *key.memo : local;
+    PatchSystem local;  // without a memo: this resolve's own
+    PatchSystem& kept = key.memo != nullptr ? key.memo->system : local;
     if (!kept.has_matrix) {
+        for (auto& row : kept.matrix) {
+            std::fill(std::begin(row), std::end(row), 0.0);
+        }
         if (movable.a) {
             add_wrench_matrix(bodies, model, a, f.ra, kept.matrix);
         }

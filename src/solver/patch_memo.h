@@ -26,17 +26,23 @@ struct PatchGeometry {
     Vec3 ra, rb;       // m, c from each body's predicted centre
 };
 
+// A patch's wrench matrix A and its static system factored (factor_dense), each built when
+// first needed; their entries are written then (a resolve without a memo zeroes nothing else).
+struct PatchSystem {
+    bool has_matrix = false;   // matrix is the patch's A
+    bool has_factors = false;  // factors and pivot hold the static system's (solvable)
+    bool solvable = false;
+    double matrix[6][6];
+    double factors[6][6];
+    int pivot[6];
+};
+
 struct PatchMemo {
     uint64_t members = 0;  // bit r: row r of the pair's contacts is in the patch; 0: none kept
     uint8_t movable = 0;   // bit 0: body a takes impulses, bit 1: body b (matrix holds theirs)
     bool point = false;    // the patch is a single point: no wrench
-    bool has_matrix = false;   // matrix is the patch's A
-    bool has_factors = false;  // factors and pivot hold the static system's (solvable)
-    bool solvable = false;
     PatchGeometry geometry = {};
-    double matrix[6][6] = {};
-    double factors[6][6] = {};
-    int pivot[6] = {};
+    PatchSystem system = {};
 };
 
 // The memo of a pair's patch and the patch's contacts, or no memo (nullptr): a patch with a
