@@ -713,11 +713,12 @@ CASES = (
          "contact stages predict its pose by the same motion. The tip's impulses are judged by "
          "the instantaneous velocity of the contact point, while the axis nutates within the "
          "step (|L| dt / I1 = 2.3 rad at 1/240): each step sinks the tip ~0.14 mm, which the "
-         "overlap correction lifts out. The lift's potential energy is taken from the top's "
+         "overlap correction lifts out. What a step would gain by it is taken from the top's "
          "kinetic energy (SolverConfig.overlap_energy; free of cost, the energy grew 0.5% in "
-         "2 s at 1/240): the energy never exceeds E0 and falls instead, 0.7% in 2 s at 1/240 "
-         "(the spin 0.35%). At 1/120 the nutation turns 4.6 rad a step, past half a turn, and "
-         "the tilt wanders (6 to 37 deg): the rate is off by 8%."),
+         "2 s at 1/240): the energy never exceeds E0, and at 1/240 ends 8e-6 below it (the "
+         "spin 1e-5 above). At 1/120 the nutation turns 4.6 rad a step, past half a turn, and "
+         "the tilt wanders (24 to 33 deg; 18 to 39 at 1/60): the rate is off by 6% (18% at "
+         "1/60)."),
     Case("plank_on_bars", "1 kg plank 1 x 0.1 x 0.02 m across two round bars (r = 2 cm), mu = 0.5, "
          f"{PLANK_SECONDS:g} s", "at rest", ("largest point speed, m/s", "centre moved, m"),
          scenes.plank_on_bars, plank_on_bars_errors, PASS_SETTINGS,

@@ -16,9 +16,9 @@
 // iterations. Only positions move, by translations split by inverse mass: orientations are
 // untouched, and a resting contact (overlap far below the slop) is left exactly as it is
 // (stacks stay bitwise at rest, sleeping stays exact). A lift against gravity adds potential
-// energy, which with Settings::overlap_energy the lifted body pays from its kinetic energy
-// where only static bodies touch it (overlap.cpp's pay_for_lifts); otherwise velocities are
-// untouched.
+// energy; with Settings::overlap_energy a lifted body that only static bodies touch pays from
+// its kinetic energy whatever the step would have gained (overlap.cpp's pay_for_lifts);
+// otherwise velocities are untouched.
 #pragma once
 
 #include "solver/world.h"

@@ -16,7 +16,7 @@ struct Settings {
     bool detect_every_pass = false;   // contacts.h: the narrow phase in every pass
     bool keep_energy = true;          // integrate.h: rotation update put back on the body's energy
     double overlap_correction = 1.0;  // overlap.h: fraction of excess overlap removed per step
-    bool overlap_energy = true;       // overlap.h: a lift's potential energy taken from the body
+    bool overlap_energy = true;       // overlap.h: a lifted body's step gains no energy
     int joint_passes = 20;            // joints.h: rounds of each joint solve; 0: joint stages off
     bool continuous = true;           // continuous.h: pairs that move far in a step found at impact
     bool contact_patches = true;      // solver.h: patch wrenches between movable bodies, and a
