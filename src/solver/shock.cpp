@@ -16,6 +16,7 @@
 // the falling pile of 1000 the reactions' rounds ran all 4 in 203 of the first 231 stages,
 // from level 1 up, and 89% of their resolves applied nothing.
 #include <algorithm>
+#include <cmath>
 
 #include "solver/contacts.h"
 #include "solver/levels.h"
@@ -40,7 +41,19 @@ constexpr int SHOCK_ROUNDS = 3;
 // Times the levels are resolved again in one round for the frictional reactions passed on to
 // frozen supports (propagate_world_shock). A block sliding on a block needs one; a support
 // that friction's reaction turns against its own frictional support, and a body on it that
-// follows, a few; what the last leaves is the next step's.
+// follows, a few; what the last leaves is the next step's. The rounds are a fixed-point
+// iteration between a body and its support: the body's impulse is sized against the support
+// held still, the support then takes it reversed and moves into (or away from) the body by
+// k_s / k_b of their relative velocity, k being each one's mobility at the contact, and the
+// next round answers that. The series converges to the two bodies' joint impulse where the
+// support is the heavier at the point (k_s < k_b) and grows where it is the lighter: in the
+// pile of 1000 (seed 2, step 98) a 62 g box under four bodies on its slanted faces took
+// reactions that turned it at 64, 96 and 221 rad/s in successive rounds, and it struck a
+// sphere 10 mm deep. So a support lighter at the point takes no reaction (solver.cpp,
+// lighter_at), and as several bodies' reactions on one support can still add up to a growing
+// series, a round whose reactions are larger than the last's (reaction_size) is diverging:
+// they are dropped and the rounds stop, what the earlier ones passed on kept (14 times in the
+// first 120 steps of that pile).
 constexpr int REACTION_ROUNDS = 4;
 
 // m: pairs this close at the predicted poses are ordered by the graph (graph.touching). The
@@ -267,6 +280,23 @@ int64_t apply_reactions(StepContext& w) {
     return lowest;
 }
 
+// The size of the reactions held back in w.reaction: the sum of their linear impulses' norms,
+// N s.
+double reaction_size(const StepContext& w) {
+    double size = 0.0;
+    for (int i = 0; i < w.num_bodies(); ++i) {
+        size += std::sqrt(dot(w.reaction[i], w.reaction[i]));
+    }
+    return size;
+}
+
+// Forget the reactions held back in w.reaction.
+void drop_reactions(StepContext& w) {
+    for (int64_t i = 0; i < w.reaction.size; ++i) {
+        w.reaction[i] = {0.0, 0.0, 0.0};
+    }
+}
+
 // Did the levels' impulses bring a pair into contact that was apart when the graph was
 // built? Its bodies overlap at the predicted poses now, and the graph ordered them by
 // nothing: the lower one, pushed up off its supports, runs into a body that was falling
@@ -309,8 +339,15 @@ void propagate_world_shock(StepContext& w, int64_t pairs, double dt) {
         // them against their own supports: the levels are resolved again from the ground up
         // while any were passed on (a block sliding on a block on a frictionless floor: once)
         int reactions = resolve_levels(w, m, dt, 0);
+        double size = reaction_size(w);
         for (int again = 0; reactions > 0 && again < REACTION_ROUNDS; ++again) {
             reactions = resolve_levels(w, m, dt, apply_reactions(w));
+            const double next = reactions > 0 ? reaction_size(w) : 0.0;
+            if (next > size) {  // the rounds diverge: stop them
+                drop_reactions(w);
+                reactions = 0;
+            }
+            size = next;
         }
         if (reactions > 0) {
             apply_reactions(w);  // what the last round passed on: the next step's to settle

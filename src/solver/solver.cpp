@@ -218,6 +218,27 @@ Pressures patch_pressures(const ContactSet& set, int64_t seed, int64_t count, Ve
     return out;
 }
 
+// Does contact i's partner move more at x under an impulse along t (its mobility d.K d,
+// add_point_mass_matrix) than the resolved body does? Then passing t on to it would diverge
+// (shock.cpp, REACTION_ROUNDS): the body's impulse was sized against the partner held still,
+// and the partner, reversed, would answer it by more than the relative velocity it stopped.
+bool lighter_at(const StepContext& w, const ContactSet& set, int64_t i, Vec3 x, Vec3 t) {
+    const double size = std::sqrt(dot(t, t));
+    if (!(size > 0.0)) {
+        return false;
+    }
+    const Vec3 d = scale(1.0 / size, t);
+    const int64_t k = set.source[i];
+    const int body = static_cast<int>(set.orient[i] > 0.0 ? w.lists.pair_a[k] : w.lists.pair_b[k]);
+    const int partner = static_cast<int>(set.partner[i]);
+    Mat3 own{}, other{};
+    add_point_mass_matrix(w.model.inverse_mass[body], w.bodies.inverse_inertia[body],
+                          sub(x, set.centre_a[i]), own);
+    add_point_mass_matrix(w.model.inverse_mass[partner], w.bodies.inverse_inertia[partner],
+                          sub(x, set.centre_b[i]), other);
+    return dot(d, rotate(other, d)) > dot(d, rotate(own, d));
+}
+
 // The reaction across gravity of a sliding patch or a single impulse: the part of `share`
 // (an impulse on the resolved body at point x) off the up axis, held back reversed in
 // w.reaction for contact i's partner when that is a dynamic body held frozen by shock
@@ -236,6 +257,9 @@ int react(const StepContext& w, const ContactSet& set, int64_t i, Vec3 x, Vec3 s
     }
     const Vec3 up = w.up;
     const Vec3 t = sub(share, scale(dot(share, up), up));
+    if (lighter_at(w, set, i, x, t)) {
+        return 0;
+    }
     const int n = w.num_bodies();
     w.reaction[partner] = sub(w.reaction[partner], t);
     w.reaction[n + partner] = sub(w.reaction[n + partner], cross(sub(x, set.centre_b[i]), t));
