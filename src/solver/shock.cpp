@@ -339,7 +339,7 @@ void propagate_world_shock(StepContext& w, int64_t pairs, double dt) {
         // them against their own supports: the levels are resolved again from the ground up
         // while any were passed on (a block sliding on a block on a frictionless floor: once)
         int reactions = resolve_levels(w, m, dt, 0);
-        double size = reaction_size(w);
+        double size = reactions > 0 ? reaction_size(w) : 0.0;
         for (int again = 0; reactions > 0 && again < REACTION_ROUNDS; ++again) {
             reactions = resolve_levels(w, m, dt, apply_reactions(w));
             const double next = reactions > 0 ? reaction_size(w) : 0.0;
