@@ -25,7 +25,7 @@ def test_quick_report_writes_every_case_and_its_figures(quick_report):
     text = (quick_report / "report.md").read_text()
     for case in cases.CASES:
         assert case.title in text
-    for name in ("towers", "pyramid", "heavy on light", "fast spinner", "thin rod", "e = 1",
+    for name in ("towers", "pyramid", "heavy on light", "10 g box", "fast spinner", "thin rod", "e = 1",
                  "mu = 0", "mu = 5", "1 cm wall", "dt = 1/1000", "masses 1e-3 to 1e3",
                  "pile of", "Mass properties", "Solver phases used"):
         assert name.lower() in text.lower(), name
@@ -40,7 +40,8 @@ def test_quick_report_writes_every_case_and_its_figures(quick_report):
 # dropped from the report, or a case function returning fewer results, fails.
 STIFF_TITLES = (r"10-cube tower, [\d.]+ s", r"20-cube tower, [\d.]+ s", r"40-cube tower, [\d.]+ s",
                 r"55-box pyramid, [\d.]+ s", r"heavy on light 100:1, [\d.]+ s",
-                r"heavy on light 1000:1, [\d.]+ s", r"fast spinner, .*", r"thin rod 50:1 .*",
+                r"heavy on light 1000:1, [\d.]+ s",
+                r"0.5 kg ball dropped at 3 m/s on a 10 g box's top edge, .*", r"fast spinner, .*", r"thin rod 50:1 .*",
                 r"e = 1, ball and tilted cube, .*", r"mu = 0, .*", r"mu = 5, .*",
                 r"ball vs 1 cm wall, .*", r"10-cube tower at dt = 1/1000 \.\.\. 1/30, .*",
                 r"cube dropped 1 m, alone and onto a cube, .*",
@@ -50,7 +51,7 @@ STIFF_TITLES = (r"10-cube tower, [\d.]+ s", r"20-cube tower, [\d.]+ s", r"40-cub
 
 
 def test_every_stiff_case_reports_pass_or_fail_with_its_numbers(quick_report):
-    """Each of the 18 stiff cases has exactly one first row with its verdict, and no other
+    """Each of the 19 stiff cases has exactly one first row with its verdict, and no other
     case has one; each failure is listed with its cause and bound."""
     text = (quick_report / "report.md").read_text()
     rows = [line for line in text.splitlines() if "| PASS |" in line or "| **FAIL** |" in line]
@@ -58,8 +59,8 @@ def test_every_stiff_case_reports_pass_or_fail_with_its_numbers(quick_report):
     for pattern in STIFF_TITLES:
         matching = [title for title in titles if re.fullmatch(pattern, title)]
         assert len(matching) == 1, f"stiff case {pattern!r}: rows {matching}"
-    assert len(titles) == len(STIFF_TITLES) == 18, titles
-    assert f"{len(titles) - sum('**FAIL**' in row for row in rows)} of 18 cases pass" in text
+    assert len(titles) == len(STIFF_TITLES) == 19, titles
+    assert f"{len(titles) - sum('**FAIL**' in row for row in rows)} of 19 cases pass" in text
     failures = [line for line in text.splitlines() if line.startswith("- **")]
     assert len(failures) == sum("| **FAIL** |" in row for row in rows)
     assert all("Cause:" in line and "(bound" in line for line in failures)

@@ -416,6 +416,19 @@ def plank_on_bars(bars=(-0.3, 0.2), friction: float = 0.5, radius: float = BAR_R
     return scene
 
 
+def ball_on_box_edge(offset: float, box_mass: float = 0.01, ball_mass: float = 0.5,
+                     speed: float = 3.0) -> rg.Scene:
+    """A ball (r = 2.5 cm, ``ball_mass`` kg) falling at ``speed`` m/s from 4 mm above a 5 cm
+    box (``box_mass`` kg) resting on the ground, ``offset`` m off the box's axis in x (0.025:
+    over its top edge); mu = 0.5 everywhere."""
+    scene = rg.Scene()
+    scene.add_ground(friction=0.5)
+    scene.add_body(rg.Box((0.025,) * 3), mass=box_mass, friction=0.5, position=(0, 0, 0.025))
+    scene.add_body(rg.Sphere(0.025), mass=ball_mass, friction=0.5,
+                   position=(offset, 0, 0.079), velocity=(0, 0, -speed))
+    return scene
+
+
 def tiny_on_huge(offset=(0.13, 0.1), gap: float = 0.02) -> rg.Scene:
     """A 1 mm cube (body 2, 1e-6 kg) dropped from ``gap`` m onto a 1 m cube (body 1, 1000 kg:
     mass ratio 1e9) resting on the ground, ``offset`` (m) from the top face's centre."""
