@@ -103,7 +103,8 @@ def table(results: list[dict]) -> str:
                    f"episodes per seed on seeds apart from training's, of each run's selected "
                    f"checkpoint (the best on held-out validation seeds of its second half, "
                    f"`train.finish`). Machine: {'; '.join(machines)}; one process per run, "
-                   f"PyTorch's, XLA's and the solver's pools on one thread{threads_note(results)}.")]
+                   "PyTorch's, XLA's and the solver's pools on one thread"
+                   f"{threads_note(results)}.")]
     return "\n".join(lines)
 
 

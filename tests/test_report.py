@@ -25,8 +25,8 @@ def test_quick_report_writes_every_case_and_its_figures(quick_report):
     text = (quick_report / "report.md").read_text()
     for case in cases.CASES:
         assert case.title in text
-    for name in ("towers", "pyramid", "heavy on light", "10 g box", "fast spinner", "thin rod", "e = 1",
-                 "mu = 0", "mu = 5", "1 cm wall", "dt = 1/1000", "masses 1e-3 to 1e3",
+    for name in ("towers", "pyramid", "heavy on light", "10 g box", "fast spinner", "thin rod",
+                 "e = 1", "mu = 0", "mu = 5", "1 cm wall", "dt = 1/1000", "masses 1e-3 to 1e3",
                  "pile of", "Mass properties", "Solver phases used"):
         assert name.lower() in text.lower(), name
     for png in ("work_precision.png", "torque_free.png", "mass_properties.png"):
@@ -41,7 +41,8 @@ def test_quick_report_writes_every_case_and_its_figures(quick_report):
 STIFF_TITLES = (r"10-cube tower, [\d.]+ s", r"20-cube tower, [\d.]+ s", r"40-cube tower, [\d.]+ s",
                 r"55-box pyramid, [\d.]+ s", r"heavy on light 100:1, [\d.]+ s",
                 r"heavy on light 1000:1, [\d.]+ s",
-                r"0.5 kg ball dropped at 3 m/s on a 10 g box's top edge, .*", r"fast spinner, .*", r"thin rod 50:1 .*",
+                r"0.5 kg ball dropped at 3 m/s on a 10 g box's top edge, .*",
+                r"fast spinner, .*", r"thin rod 50:1 .*",
                 r"e = 1, ball and tilted cube, .*", r"mu = 0, .*", r"mu = 5, .*",
                 r"ball vs 1 cm wall, .*", r"10-cube tower at dt = 1/1000 \.\.\. 1/30, .*",
                 r"cube dropped 1 m, alone and onto a cube, .*",
@@ -255,9 +256,10 @@ def test_a_fast_heavy_top_precesses_at_the_closed_form_rate():
 @pytest.mark.parametrize("dt", [1 / 30, 1 / 60, 1 / 120, 1 / 240, 1 / 480])
 def test_a_heavy_top_on_a_frictionless_floor_never_gains_energy(dt):
     """Nothing adds energy (frictionless floor, e = 0): the top's energy is never above E0,
-    to the last bit (the metric is max(E) / E0 - 1, or 0; the solver aims 1e-12 below). Its axis nutates within each step
-    and sinks the tip ~0.14 mm into the floor at dt = 1/240; lifting it out free of cost
-    (overlap_energy off) gained 0.5% of E0 in 2 s there, 1.3% at 1/30."""
+    to the last bit (the metric is max(E) / E0 - 1, or 0; the solver aims 1e-12 below). Its
+    axis nutates within each step and sinks the tip ~0.14 mm into the floor at dt = 1/240;
+    lifting it out free of cost (overlap_energy off) gained 0.5% of E0 in 2 s there, 1.3% at
+    1/30."""
     assert run_case("heavy_top", dt)[1] == 0.0
     if dt == 1 / 240:
         assert run_case("heavy_top", dt, overlap_energy=False)[1] > 4e-3

@@ -586,8 +586,9 @@ def hanging_chain(scale: float) -> list[StiffResult]:
 
 
 CASES: tuple[Callable[[float], list[StiffResult]], ...] = (
-    towers, pyramid, heavy_on_light, ball_on_light_box, fast_spinner, thin_rod, elastic, friction_extremes,
-    tunnelling, dt_range, drop_and_settle, mass_range, sleeping, big_pile, hanging_chain)
+    towers, pyramid, heavy_on_light, ball_on_light_box, fast_spinner, thin_rod, elastic,
+    friction_extremes, tunnelling, dt_range, drop_and_settle, mass_range, sleeping, big_pile,
+    hanging_chain)
 """Every stiff/extreme case: (scale) -> results; scale 1 is the full report, < 1 shortens
 runs (the quick report)."""
 

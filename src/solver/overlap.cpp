@@ -28,8 +28,8 @@ constexpr double ROUND_OFF = 1e-12;
 // depth its nutation within the step sank it to, gained 0.5% of its energy in 2 s at
 // dt = 1/240. Not every lift is a gain: a block pushed over about its edge is lifted in its
 // steps too, yet none of them gains (paying the whole lift turned it 0.6% slower at 30 deg
-// than the closed form's energy balance), and there nothing is taken. The applied work is counted
-// at the final velocities, as gravity's is (symplectic Euler: free motion then loses
+// than the closed form's energy balance), and there nothing is taken. The applied work is
+// counted at the final velocities, as gravity's is (symplectic Euler: free motion then loses
 // M (a dt)^2 / 2 a step, never gains). A scaled velocity field approaches no static partner
 // it did not approach, slides in the same directions and keeps its axis of rotation, so the
 // contact conditions the impulse stages left hold still.

@@ -218,16 +218,12 @@ Pressures patch_pressures(const ContactSet& set, int64_t seed, int64_t count, Ve
     return out;
 }
 
-// Does contact i's partner move more at x under an impulse along t (its mobility d.K d,
-// add_point_mass_matrix) than the resolved body does? Then passing t on to it would diverge
-// (shock.cpp, REACTION_ROUNDS): the body's impulse was sized against the partner held still,
-// and the partner, reversed, would answer it by more than the relative velocity it stopped.
+// Does contact i's partner move more at x under the impulse t (t.K t, K its point mass
+// matrix, add_point_mass_matrix) than the resolved body does? Then passing t on to it would
+// diverge (shock.cpp, REACTION_ROUNDS): the body's impulse was sized against the partner held
+// still, and the partner, reversed, would answer it by more than the relative velocity it
+// stopped.
 bool lighter_at(const StepContext& w, const ContactSet& set, int64_t i, Vec3 x, Vec3 t) {
-    const double size = std::sqrt(dot(t, t));
-    if (!(size > 0.0)) {
-        return false;
-    }
-    const Vec3 d = scale(1.0 / size, t);
     const int64_t k = set.source[i];
     const int body = static_cast<int>(set.orient[i] > 0.0 ? w.lists.pair_a[k] : w.lists.pair_b[k]);
     const int partner = static_cast<int>(set.partner[i]);
@@ -236,7 +232,7 @@ bool lighter_at(const StepContext& w, const ContactSet& set, int64_t i, Vec3 x, 
                           sub(x, set.centre_a[i]), own);
     add_point_mass_matrix(w.model.inverse_mass[partner], w.bodies.inverse_inertia[partner],
                           sub(x, set.centre_b[i]), other);
-    return dot(d, rotate(other, d)) > dot(d, rotate(own, d));
+    return dot(t, rotate(other, t)) > dot(t, rotate(own, t));
 }
 
 // The reaction across gravity of a sliding patch or a single impulse: the part of `share`
