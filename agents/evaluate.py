@@ -34,9 +34,10 @@ EVAL_SEED = 1_000_000
 VALIDATION_SEED = 3_000_000
 """Episodes that choose among a run's checkpoints (``train.finish``) use seeds from here: apart
 from training's, the demonstrations' (2,000,000 on) and the evaluation's."""
-OBSERVATION_OPTIONS = ("obs_mode", "width", "height", "camera", "goal_marker")
-"""The env arguments that shape what a policy observes: a pixel model's env is made with its
-settings' values of these (``observation_kwargs``)."""
+OBSERVATION_OPTIONS = ("obs_mode", "width", "height", "camera", "goal_marker", "effector")
+"""The env arguments that shape what a policy observes or what its actions do: a pixel
+model's env, or a gripper model's (``effector``), is made with its settings' values of these
+(``observation_kwargs``)."""
 MODELS = Path(__file__).with_name("models")
 """The committed models: NAME.zip, with NAME.json (settings and ``evaluation``) beside each."""
 

@@ -25,8 +25,9 @@ RESULTS = Path(__file__).with_name("results")
 
 def method(run: dict) -> str:
     """The algorithm as the table names it, from a run.json record, e.g. "SAC + HER + 200
-    demos", "PPO, shaped reward" or, with Stack's curriculum (``start_placed``), "PPO, shaped
-    reward, 50% of episodes start with cube 0 placed"."""
+    demos", "PPO, shaped reward", "SAC + HER, two-finger gripper" (``effector``) or, with
+    Stack's curriculum (``start_placed``), "PPO, shaped reward, 50% of episodes start with
+    cube 0 placed"."""
     name = run["algo"].upper()
     if "HerReplayBuffer" in str(run["kwargs"].get("replay_buffer_class", "")):
         name += " + HER"
@@ -36,6 +37,7 @@ def method(run: dict) -> str:
     env_kwargs = run.get("env_kwargs") or {}
     reward = env_kwargs.get("reward_type")
     name += f", {reward} reward" if reward else ""
+    name += ", two-finger gripper" if env_kwargs.get("effector") == "gripper" else ""
     placed = env_kwargs.get("start_placed")
     return name + (f", {placed:.0%} of episodes start with cube 0 placed" if placed else "")
 

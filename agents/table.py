@@ -29,12 +29,15 @@ RECIPES = {
     "stack": [("rigid_gym/Stack-v0", "bc_sac"), ("rigid_gym/Stack-v0", "sac"),
               ("rigid_gym/Stack-v0", "ppo")],
     **{task.lower(): [(f"rigid_gym/{task}-v0", "sac"), (f"rigid_gym/{task}-v0", "ppo")]
-       for task in ("Reach", "PickAndPlace", "Slide", "Flip", "Insert")},
+       for task in ("Reach", "Slide", "Flip", "Insert")},
+    "pickandplace": [("rigid_gym/PickAndPlace-v0", algo)
+                     for algo in ("sac", "ppo", "sac_gripper", "ppo_gripper")],
     "tower": [("rigid_gym/Tower-v0", "sac"), ("rigid_gym/Tower-v0", "ppo")],
 }
-"""task -> its (env id, algo) recipes in the table (hyperparams.yml: the entry, or its
+"""task -> its (env id, recipe) pairs in the table (hyperparams.yml: the entry, or its
 ``algos``): SAC + HER (Throw with demonstrations, the others without), Stack's
-behaviour-cloning recipe, and PPO on the shaped reward."""
+behaviour-cloning recipe, PPO on the shaped reward, and PickAndPlace's SAC and PPO with the
+two-finger gripper (sac_gripper, ppo_gripper)."""
 PACE = {
     ("rigid_gym/Push-v0", "sac"): 767,
     ("rigid_gym/Push-v0", "ppo"): 7754,
@@ -166,7 +169,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--tasks", default=",".join(RECIPES),
                         help=f"comma-separated, of {', '.join(RECIPES)} (default all)")
     parser.add_argument("--algos", default=None,
-                        help="comma-separated algos to keep (sac, bc_sac, ppo; default all)")
+                        help="comma-separated recipes to keep (sac, bc_sac, ppo, sac_gripper, ...; "
+                             "default all)")
     parser.add_argument("--seeds", default="0,1,2", help="comma-separated (default 0,1,2)")
     parser.add_argument("--jobs", type=int, default=2,
                         help="processes at once, one thread each (default 2)")

@@ -59,8 +59,8 @@ from stable_baselines3.common.vec_env import VecCheckNan, VecMonitor
 import rigid_gym  # noqa: F401  (registers the env ids)
 from rigid_gym.checks import integer
 
-from .algorithms import PIXEL_ALGORITHMS, algorithm_class, learner_for
-from .evaluate import VALIDATION_SEED, load_model, success_rate
+from .algorithms import ALGORITHMS, PIXEL_ALGORITHMS, algorithm_class, learner_for
+from .evaluate import VALIDATION_SEED, load_model, observation_kwargs, success_rate
 from .progress import note
 from .vec_env import SB3VecEnv
 
@@ -95,7 +95,9 @@ def hyperparams_table() -> dict[str, dict]:
 def load_hyperparams(env_id: str, algo: str | None = None) -> dict:
     """The settings for ``env_id`` from hyperparams.yml; with ``algo`` named in the entry's
     ``algos`` (another recipe for the same id, e.g. Stack's SAC + HER without demonstrations),
-    the entry with that recipe's keys replacing its own."""
+    the entry with that recipe's keys replacing its own. A recipe is named by its algorithm,
+    or names it (``algo``: PickAndPlace's ``sac_gripper`` is SAC with the two-finger gripper);
+    ``recipe`` is then the recipe's name, the runs' (``run_name``)."""
     table = hyperparams_table()
     if env_id not in table:
         raise ValueError(f"train: no settings for {env_id!r} in {HYPERPARAMS.name}; "
@@ -103,7 +105,9 @@ def load_hyperparams(env_id: str, algo: str | None = None) -> dict:
     entry = dict(table[env_id])
     recipes = entry.pop("algos", {})
     if algo is not None and algo != entry["algo"] and algo in recipes:
-        entry.update(recipes[algo], algo=algo)
+        entry.update({"algo": algo, **recipes[algo]})
+        if entry["algo"] != algo:
+            entry["recipe"] = algo
     return entry
 
 
@@ -214,9 +218,15 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
                             final_episodes=final_episodes, results=results, teacher=teacher,
                             progress=progress)
     settings = load_hyperparams(env_id, algo)
-    algo = algo or settings["algo"]
+    recipe = algo or settings["algo"]  # names the run
+    # a recipe that names its algorithm (sac_gripper) trains that one
+    algo = settings["algo"] if "recipe" in settings else recipe
+    if algo not in ALGORITHMS:  # before anything is made
+        recipes = sorted(hyperparams_table()[env_id].get("algos", {}))
+        raise ValueError(f"train: algo must be one of {ALGORITHMS} or one of {env_id}'s "
+                         f"recipes in {HYPERPARAMS.name} {recipes}, got {algo!r}")
     learner = learner_for(algo, learner or settings.get("learner"))
-    algorithm_class(algo, learner)  # an unknown algo fails here, before anything is made
+    algorithm_class(algo, learner)  # an algo whose package is missing fails here
     timesteps = _count(timesteps if timesteps is not None else settings["n_timesteps"],
                        "timesteps", 1)
     n_envs = _count(n_envs if n_envs is not None else settings.get("n_envs", 1), "n_envs", 1)
@@ -233,14 +243,14 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
     if demonstrations and algo == "ppo":
         raise ValueError("train: demonstrations fill a replay buffer; ppo has none")
 
-    folder = run_directory(out, env_id, algo, seed)
+    folder = run_directory(out, env_id, recipe, seed)
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "result.json").unlink(missing_ok=True)  # a result only once the run finished
     if resume is None:  # a new run: no checkpoint of an earlier one in this folder is its own
         shutil.rmtree(folder / "checkpoints", ignore_errors=True)
         (folder / "selected_model.zip").unlink(missing_ok=True)
     if resume is not None:
-        record = _restore_files(Path(resume), folder, env_id, algo, seed)
+        record = _restore_files(Path(resume), folder, env_id, recipe, seed)
         # the checkpoint's model is of its learner, its buffer of its number of envs
         learner, n_envs = record.get("learner", "sb3"), record["n_envs"]
     note(f"{env_id}: making {n_envs} env(s) and the {algo} model on {learner} (run folder "
@@ -265,13 +275,16 @@ def train(env_id: str, *, algo: str | None = None, timesteps: int | None = None,
                                   demo_dataset) \
             if demonstrations else None
         _write_run(folder, env_id, algo, learner, seed, timesteps, n_envs,
-                   model_kwargs(settings, algo, overrides), demo, settings.get("env_kwargs", {}))
+                   model_kwargs(settings, algo, overrides), demo, settings.get("env_kwargs", {}),
+                   recipe)
 
     callbacks: list[BaseCallback] = []
     if eval_freq:
         callbacks.append(SuccessEvaluation(env_id, folder / "evaluations.csv", eval_freq,
                                            eval_episodes, clock, append=resume is not None,
-                                           progress=progress))
+                                           progress=progress,
+                                           env_kwargs=observation_kwargs(
+                                               json.loads((folder / "run.json").read_text()))))
     checkpoints = Checkpoints(folder, checkpoint_freq, clock, on_checkpoint) \
         if checkpoint_freq else None
     callbacks += [checkpoints] if checkpoints else []
@@ -344,8 +357,9 @@ def finish(folder: Path, model, clock: Clock, episodes: int = 100,
     to ``selected_model.zip`` (model selection on held-out seeds, as the RL Zoo keeps its
     best_model.zip); without, the final ``model``. Then ``episodes`` episodes from EVAL_SEED.
     The choice's evaluations count in the run's wall and CPU seconds (``clock``)."""
-    env_id = json.loads((folder / "run.json").read_text())["env_id"]
-    env = gym.make(env_id)
+    record = json.loads((folder / "run.json").read_text())
+    env_id = record["env_id"]
+    env = gym.make(env_id, **observation_kwargs(record))
     steps, chosen = model.num_timesteps, model
     candidates = sorted((int(path.name.split("_")[1]), path)
                         for path in folder.glob("checkpoints/step_*")
@@ -545,9 +559,10 @@ def fill_replay_buffer(model, dataset, env_id: str, episodes: int) -> dict:
 
 
 def _write_run(folder: Path, env_id, algo, learner, seed, timesteps, n_envs, kwargs, demo,
-               env_kwargs) -> None:
+               env_kwargs, recipe) -> None:
     record = {
         "env_id": env_id, "algo": algo, "learner": learner, "seed": seed, "timesteps": timesteps,
+        **({"recipe": recipe} if recipe != algo else {}),
         "env_kwargs": env_kwargs,
         "n_envs": n_envs, "demonstrations": demo, "command": " ".join(sys.argv),
         "kwargs": {k: v if isinstance(v, (int, float, str, dict, list)) else repr(v)
@@ -587,9 +602,9 @@ class SuccessEvaluation(EveryNSteps):
     a bar of each evaluation's episodes."""
 
     def __init__(self, env_id: str, path: Path, every: int, episodes: int, clock: Clock,
-                 append: bool = False, progress: bool = False):
+                 append: bool = False, progress: bool = False, env_kwargs: dict | None = None):
         super().__init__(every)
-        self.env = gym.make(env_id)
+        self.env = gym.make(env_id, **(env_kwargs or {}))
         self.path, self.episodes, self.clock, self.progress = path, episodes, clock, progress
         if not append:
             with open(path, "w", newline="") as f:
@@ -741,18 +756,18 @@ def load_buffers(model, folder: Path) -> None:
                 buffer.truncate_last_trajectory()
 
 
-def _restore_files(checkpoint: Path, folder: Path, env_id: str, algo: str, seed: int) -> dict:
+def _restore_files(checkpoint: Path, folder: Path, env_id: str, recipe: str, seed: int) -> dict:
     """Put a checkpoint's copies of the run's files back in the run folder (rows written after
-    it are dropped) and return its run.json, checked to be of this env, algorithm and seed."""
+    it are dropped) and return its run.json, checked to be of this env, recipe and seed."""
     meta = checkpoint / "run.json"
     if not (meta.is_file() and (checkpoint / "model.zip").is_file()):
         raise ValueError(f"train: {checkpoint} is not a checkpoint (model.zip and run.json); "
                          "latest_checkpoint(run folder) finds the newest")
     record = json.loads(meta.read_text())
-    found = (record["env_id"], record["algo"], record["seed"])
-    if found != (env_id, algo, seed):
-        raise ValueError(f"train: {checkpoint} is a checkpoint of env, algo, seed {found}, "
-                         f"not {(env_id, algo, seed)}")
+    found = (record["env_id"], record.get("recipe", record["algo"]), record["seed"])
+    if found != (env_id, recipe, seed):
+        raise ValueError(f"train: {checkpoint} is a checkpoint of env, recipe, seed {found}, "
+                         f"not {(env_id, recipe, seed)}")
     for pattern in CHECKPOINT_FILES:
         for path in checkpoint.glob(pattern):
             if path.parent.resolve() != folder.resolve():

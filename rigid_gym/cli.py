@@ -4,7 +4,7 @@
     rigid-gym record ENV_ID [--policy random|scripted|MODEL.zip] [--algo NAME] [--episodes N]
                      [--seed S] [--out DIR] [--run NAME] [--contacts]
     rigid-gym replay FILE [FILE ...] [--web]
-    rigid-gym train ENV_ID [--algo sac|tqc|ppo|bc_sac] [--learner auto|sbx|sb3|batch] [--steps N]
+    rigid-gym train ENV_ID [--algo sac|tqc|ppo|bc_sac|RECIPE] [--learner auto|sbx|sb3|batch] [--steps N]
                     [--seed S] [--n-envs N] [--out DIR] [--eval-freq N] [--eval-episodes N]
                     [--final-episodes N] [--results DIR] [--checkpoint-freq N] [--resume]
                     [--demos N] [--demo-dataset ID] [--progress-bar]
@@ -412,10 +412,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--teacher", metavar="MODEL", default=None,
                    help="with --obs-mode pixels: the state policy that labels the student's "
                    "states (default hyperparams.yml's)")
-    p.add_argument("--algo", choices=("sac", "tqc", "ppo", "bc_sac", "distill", "drq"),
-                   default=None,
-                   help="default: the env's entry in agents/hyperparams.yml (another recipe of "
-                        "the entry's `algos` brings its settings)")
+    p.add_argument("--algo", default=None,
+                   help="sac, tqc, ppo, bc_sac, distill, drq, or a recipe of the env's entry "
+                        "in agents/hyperparams.yml (its `algos`: e.g. sac_gripper); default: "
+                        "the entry's own")
     p.add_argument("--learner", choices=("auto", "sbx", "sb3", "batch"), default="auto",
                    help="sbx (JAX, the `fast` extra), sb3 (PyTorch) or batch (ppo only: JAX "
                         "over the batched env); auto: hyperparams.yml's, else sbx where "

@@ -77,6 +77,41 @@ def test_a_short_run_trains_saves_and_evaluates(env_id, tmp_path, monkeypatch):
                                   kept.predict(obs, deterministic=True)[0])
 
 
+def test_a_gripper_recipe_names_its_runs_and_evaluates_with_the_gripper(tmp_path):
+    """A recipe that names its algorithm (PickAndPlace's sac_gripper: SAC with
+    effector="gripper") trains that algorithm, names the run after the recipe, and validates,
+    evaluates and resumes with the gripper, whose observation the pad's env lacks."""
+    from rigid_gym.agents.results import method
+    from rigid_gym.agents.train import latest_checkpoint
+
+    env_id = "rigid_gym/PickAndPlace-v0"
+    settings = load_hyperparams(env_id, "sac_gripper")
+    assert settings["algo"] == "sac" and settings["recipe"] == "sac_gripper"
+    assert settings["env_kwargs"] == {"effector": "gripper"}
+    assert "recipe" not in load_hyperparams(env_id, "ppo")  # named by its algorithm
+    small = {"learning_starts": 60, "batch_size": 32}
+    folder = train(env_id, algo="sac_gripper", timesteps=100, n_envs=1, out=tmp_path,
+                   eval_freq=50, eval_episodes=1, checkpoint_freq=50, overrides=small,
+                   final_episodes=1)
+    assert folder.name == "PickAndPlace-sac_gripper-seed0"
+    run = json.loads((folder / "run.json").read_text())
+    assert (run["algo"], run["recipe"], run["env_kwargs"]) == (
+        "sac", "sac_gripper", {"effector": "gripper"})
+    assert method(run) == "SAC + HER, two-finger gripper"
+    gripper = gym.make(env_id, effector="gripper")
+    assert load_model(folder / "model.zip", gripper).observation_space == \
+        gripper.observation_space != gym.make(env_id).observation_space
+    assert evaluate(folder / "model.zip", episodes=1)["episodes"] == 1
+    # resumed by its recipe's name; another recipe's checkpoint is refused
+    train(env_id, algo="sac_gripper", timesteps=150, out=tmp_path, eval_freq=50,
+          eval_episodes=1, checkpoint_freq=50, resume=latest_checkpoint(folder),
+          final_episodes=1)
+    assert json.loads((folder / "result.json").read_text())["env_steps"] == 150
+    with pytest.raises(ValueError, match="recipe, seed .*sac_gripper"):
+        train(env_id, algo="sac", timesteps=200, out=tmp_path,
+              resume=latest_checkpoint(folder))
+
+
 def test_demonstrations_are_stored_as_the_scripted_policy_played_them():
     from stable_baselines3 import SAC, HerReplayBuffer
     from stable_baselines3.common.env_util import make_vec_env

@@ -254,7 +254,9 @@ def test_a_new_run_in_a_used_folder_chooses_only_among_its_own_checkpoints(tmp_p
      "--resume: no checkpoint in /nonexistent/runs/Push-sac-seed0/checkpoints"),
     (["sweep", "rigid_gym/Push-v0"], "give ENV_ID... and --seeds, or --resume"),
     (["sweep", "rigid_gym/Push-v0", "--seeds", "0", "--param", "tau"], "--param must be KEY="),
-    (["train", "rigid_gym/Push-v0", "--algo", "dqn"], "invalid choice: 'dqn'"),
+    (["train", "rigid_gym/Push-v0", "--algo", "dqn"],
+     ("'drq') or one of rigid_gym/Push-v0's recipes in hyperparams.yml ['distill', 'drq', "
+      "'ppo'], got 'dqn'")),
     (["train", "rigid_gym/Push-v0", "--steps", "0"], "must be in [1, 1000000000], got 0"),
 ])
 def test_bad_train_and_evaluate_arguments_fail_clearly(args, message, usage_error):
