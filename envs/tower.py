@@ -38,6 +38,10 @@ PLACE_STAGE = 4.0
 """The shaped reward's worth (before its division by 4 n) of each cube placed (let go of at
 its target) below the one being worked on: 1 more than carrying that cube to its target pays
 (3), so that a cube is put down, not held."""
+PLACE_SCALE = 20.0
+"""1/m: the carry stage's sharp closeness, 1 - tanh(20 d), half of its worth (the other half
+the stages' 1 - tanh(5 d)): it doubles the pay for the last 2 cm to a cube's place, where a
+cube set on a cube must land within 1-2 cm."""
 TALL_VIEW = ((0.45, -0.6, 0.55), (0.0, 0.0, 0.08), 40.0)
 """The rgb_array camera of towers of 4 and 5 (20 cm) cubes: the pixel observations' "front"
 camera, wider than the default, which frames towers of up to 3 anywhere in the range."""
@@ -110,17 +114,34 @@ class Tower(Task):
         n = self.num_cubes
         cubes = achieved_goal.reshape(-1, n, 3)
         targets = desired_goal.reshape(-1, n, 3)
-        near = distance(cubes - targets) < DISTANCE_THRESHOLD  # (k, n)
-        # placed: at its target and let go of (a cube held there is still being carried)
-        placed = near & (held[:, None] != np.arange(n))
+        # where each cube above cube 0 belongs: on the cube below as it lies, as the goal
+        # test's pair test reads it (a carry toward the absolute target would set a cube
+        # beside the one below wherever that one was put down up to 5 cm off its own)
+        on_below = cubes[:, :-1] + (targets[:, 1:] - targets[:, :-1])
+        aims = np.concatenate([targets[:, :1], on_below], axis=1)
+        mismatch = cubes[:, 1:] - on_below
+        fits = np.ones(cubes.shape[:2], dtype=bool)
+        fits[:, 1:] = ((distance(mismatch[..., :2]) < CUBE_HALF)
+                       & (np.abs(mismatch[..., 2]) < 0.5 * CUBE_HALF))
+        # there: near its target and on the one below (the goal test's, cube by cube);
+        # placed: there and let go of (a cube held there is still being carried)
+        there = (distance(cubes - targets) < DISTANCE_THRESHOLD) & fits  # (k, n)
+        placed = there & (held[:, None] != np.arange(n))
         # the cube being worked on: the first not placed (the top one when all are)
         current = np.minimum(np.cumprod(placed, axis=1).sum(axis=1), n - 1)
         rows = np.arange(len(cubes))
-        cube, target = cubes[rows, current], targets[rows, current]
-        # its stages: reach it, hold it (or it lies at its target), carry it, in [0, 3]; 4
-        # per cube below it, all placed: placing a cube pays more than carrying it there
-        carry = staged(closeness(pad - cube), (held == current) | near[rows, current],
-                       closeness(cube - target))
+        cube, aim = cubes[rows, current], aims[rows, current]
+        top = cube.copy()
+        top[:, 2] += half[rows, current]
+        # its stages: reach its top face's centre (where a pad or a hand takes a cube to set
+        # it on another: reaching for its centre paid as much for a pad beside it at the
+        # table, whose grip on a side face drags the cube along the table into the one it is
+        # to go on), hold it (or it lies there), carry it, in [0, 3]; 4 per cube below it,
+        # all placed: placing a cube pays more than carrying it there. The carry's closeness
+        # adds a sharp term (1 - tanh(20 d)) to the stages' 1 - tanh(5 d), which gains
+        # little over the last centimetres that a cube on a cube must be placed within
+        carry = staged(closeness(pad - top), (held == current) | there[rows, current],
+                       0.5 * (closeness(cube - aim) + closeness(cube - aim, PLACE_SCALE)))
         return (PLACE_STAGE * current + carry) / (PLACE_STAGE * n)
 
 
@@ -173,10 +194,12 @@ class TowerEnv(RigidGymEnv):
     the cubes lay. sparse: 0 when reached, else -1; dense: minus the distance between the
     3 n-vectors, m. shaped (for on-policy learners; staged as ManiSkill's dense rewards), in
     [0, 1]: 4 k + the stages of cube k, where cube k is the first cube not placed (within
-    0.05 m of its target and not held; the top cube when all are); a cube's stages are reach,
-    1 - tanh(5 d) of the pad's distance to it, until the pad holds it (or it lies within
-    0.05 m of its target), then carry, 2 + (1 - tanh(5 d)) of its distance to its target;
-    divided by 4 n; 1 when reached and the pad holds nothing. Placing pays: letting a cube go
+    0.05 m of its target, on the cube below as the goal test's pair test asks, and not held;
+    the top cube when all are); a cube's stages are reach, 1 - tanh(5 d) of the pad's
+    distance to its top face's centre, until the pad holds it (or it lies placed but for the
+    grip), then carry, 2 + the mean of 1 - tanh(5 d) and 1 - tanh(20 d) of its distance d to
+    its place (cube 0's target; cube k's on cube k - 1 as that one lies); divided by 4 n; 1
+    when reached and the pad holds nothing. Placing pays: letting a cube go
     at its target takes the reward from at most 3 to at least 4 (plus the next cube's reach),
     so holding a cube at its target is worth less than putting it down (the top cube held on
     the tower too: at most (4 n - 1) / 4 n, though the goal test is met), and a placed cube
