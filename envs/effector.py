@@ -191,32 +191,36 @@ class SuctionGripper(FloatingEffector):
     def command(self, motions: np.ndarray, grips: np.ndarray | None) -> None:
         """Start an env step in every world: ``motions`` (B, 3) in [-1, 1] scale
         ``STEP_DISTANCE``; ``grips`` (B,): > 0 closes the suction, <= 0 opens it; None
-        (tasks without a grip) leaves it open."""
+        (tasks without a grip) leaves it open. An object gripped now is gripped before the
+        move, whose force limit then counts it: taken up while the pad moved off its top and
+        down, it was carried into the table (4 cm deep, and held there). One let go of is
+        released after it, with the pad's new velocity."""
+        if grips is not None:
+            self.close(grips)
         self.move(motions, self.held)
         if grips is not None:
-            self.grip(grips)
+            self.open(grips)
 
     def grasp(self, worlds) -> tuple[np.ndarray, None]:
         return self.held[worlds], None
 
-    def grip(self, grips: np.ndarray) -> None:
-        """After the pad's velocity is set: in the worlds where ``grips`` (B,) > 0 and
-        nothing is held, attach the first object the pad touches (if any); where
-        ``grips`` <= 0 and an object is held, release it (with the pad's new velocity)."""
-        changing = np.flatnonzero((grips > 0.0) != (self.held >= 0))
-        if not changing.size:
-            return
-        holding = self.held[changing] >= 0
-        for world in changing[holding].tolist():
-            self.world.detach(int(self.objects[self.held[world]]), world=world)
-            self.held[world] = -1
-        closing = changing[~holding]
+    def close(self, grips: np.ndarray) -> None:
+        """In the worlds where ``grips`` (B,) > 0 and nothing is held, attach the first object
+        the pad touches (if any)."""
+        closing = np.flatnonzero((grips > 0.0) & (self.held < 0))
         if closing.size:  # the contact query only where an object is within reach
             s = self.world.state
             offsets = s.position[closing][:, self.objects] - s.position[closing, self.body][:, None]
             near = np.einsum("wki,wki->wk", offsets, offsets) <= self.reach_squared
             for world in closing[near.any(axis=1)].tolist():
                 self.attach_touching(world)
+
+    def open(self, grips: np.ndarray) -> None:
+        """After the pad's velocity is set: in the worlds where ``grips`` (B,) <= 0 and an
+        object is held, release it (with the pad's new velocity)."""
+        for world in np.flatnonzero((grips <= 0.0) & (self.held >= 0)).tolist():
+            self.world.detach(int(self.objects[self.held[world]]), world=world)
+            self.held[world] = -1
 
     def attach_touching(self, world: int) -> None:
         """In ``world``, attach the first object (in ``objects``' order) with a contact

@@ -224,6 +224,22 @@ def test_pressing_down_on_a_cube_stops_at_its_top_and_leaves_it_on_the_table():
     assert env.gripper.position[2] == pytest.approx(2 * CUBE_HALF + PAD_HALF_EXTENTS[2], abs=1e-9)
 
 
+def test_a_cube_gripped_as_the_pad_moves_off_its_top_and_down_stays_on_the_table():
+    """The pad rests on a cube's corner, then closes while moving 5 cm aside and 5 cm down,
+    clear of the cube at the move's end: the cube is gripped before the move, whose force
+    limit counts it, so it is carried along the table's top, not into the table (it went
+    4 cm deep when the grip came after the move's limit)."""
+    env = make("rigid_gym/Stack-v0")
+    env.reset(seed=0)
+    start = pad_over_cube(env)
+    env.world.set_pose(env.gripper.body, position=env.gripper.position + [-0.017, 0.025, -0.002])
+    obs = env.step([0, 1, -1, 1])[0]
+    assert obs["observation"][6] == 1.0  # holding
+    cube = env.world.position[env.cubes[0]]
+    np.testing.assert_allclose(cube, start + [0, 0.05, 0], atol=1e-9)
+    assert env.gripper.position[2] == pytest.approx(2 * CUBE_HALF + PAD_HALF_EXTENTS[2], abs=1e-9)
+
+
 def test_pads_check_what_they_are_made_with_and_commanded():
     """The gripper's bound command object refuses a pad or an object that is no body, a step
     time <= 0, a fixture part on no body and arrays of other shapes, saying which; a command sets only the pads'
