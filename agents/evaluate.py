@@ -159,7 +159,8 @@ def commit_model(run: str | Path, name: str, episodes: int = 100) -> dict:
     if meta.get("algo") in PIXEL_ALGORITHMS:  # a pixel policy's zip holds its weights alone
         shutil.copy2(source, MODELS / f"{name}.zip")
         return finish_commit(run, name, meta, source, episodes)
-    model = load_model(source, gym.make(meta["env_id"]), meta.get("algo"))
+    model = load_model(source, gym.make(meta["env_id"], **observation_kwargs(meta)),
+                       meta.get("algo"))
     for part in ("actor_state", "qf_state"):  # SBX: flax train states
         state = getattr(model.policy, part, None)
         if state is not None:
