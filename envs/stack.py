@@ -60,17 +60,16 @@ class StackEnv(RigidGymEnv):
     goals, so HER can recompute them, also for goals relabelled from where the cubes lay.
     sparse: 0 when reached, else -1; dense: minus the distance between the 6-vectors, m.
     shaped (for on-policy learners; staged as ManiSkill's dense rewards), in [0, 1]: cube 0's
-    stages until it is placed (within 0.05 m of its target and let go of), then 4 + cube 1's;
-    a cube's stages are reach, 1 - tanh(5 d) of the pad's distance to its top face's centre,
-    until the pad holds it (or it lies placed but for the grip), then carry, 2 + the mean of 1 - tanh(5 d) and
-    1 - tanh(20 d) of its distance d to its place; divided by 8; 1 when reached and the pad
-    holds nothing. Cube 0's place is its target; cube 1's is on cube 0 as cube 0 lies (its
-    target's offset from cube 0's added to cube 0's position), and cube 1 counts as placed
-    only there too (the goal test's pair test), so a cube 0 put down a few centimetres off
-    its target is built on, not missed. Placing cube 0 takes the reward from at most 3/8
+    stages until it is placed (let go of within 0.02 m of its place), then 4 + cube 1's. Cube
+    0's place is its target; cube 1's is on cube 0 as cube 0 lies (its target's offset from
+    cube 0's added to cube 0's position), as the goal test's pair test reads it. A cube's
+    stages are reach, 1 - tanh(5 d) of the pad's distance to its top face's centre, until the
+    pad holds it (or it lies placed but for the grip), then carry, 2 + the mean of
+    1 - tanh(5 d) and 1 - tanh(20 d) of its distance d to its place; divided by 8; 1 when
+    reached and the pad holds nothing. Placing cube 0 takes the reward from at most 3/8
     (holding it at its target) to at least 4/8; holding cube 1 on cube 0 pays at most 7/8,
     though the goal test is met. Episode returns of hand-written policies (seeds 0-39): the
-    scripted stack 84.4; the same holding cube 1 2.5 cm above its target 71.8; carrying cube
+    scripted stack 84.7; the same holding cube 1 2.5 cm above its target 71.9; carrying cube
     0 2.5 cm over its target and holding it 31.3.
 
     ## Starting state

@@ -38,6 +38,11 @@ PLACE_STAGE = 4.0
 """The shaped reward's worth (before its division by 4 n) of each cube placed (let go of at
 its target) below the one being worked on: 1 more than carrying that cube to its target pays
 (3), so that a cube is put down, not held."""
+PLACED = CUBE_HALF
+"""m: the shaped reward counts a cube as placed within 2 cm of its place (cube 0's target,
+cube k's spot on cube k - 1), as the goal test's pair test places a cube on the one below:
+with the goal test's 5 cm, cube 0 was let go of as soon as it was within 5 cm of its target,
+and a tower built on it there missed the test."""
 PLACE_SCALE = 20.0
 """1/m: the carry stage's sharp closeness, 1 - tanh(20 d), half of its worth (the other half
 the stages' 1 - tanh(5 d)): it doubles the pay for the last 2 cm to a cube's place, where a
@@ -119,13 +124,10 @@ class Tower(Task):
         # beside the one below wherever that one was put down up to 5 cm off its own)
         on_below = cubes[:, :-1] + (targets[:, 1:] - targets[:, :-1])
         aims = np.concatenate([targets[:, :1], on_below], axis=1)
-        mismatch = cubes[:, 1:] - on_below
-        fits = np.ones(cubes.shape[:2], dtype=bool)
-        fits[:, 1:] = ((distance(mismatch[..., :2]) < CUBE_HALF)
-                       & (np.abs(mismatch[..., 2]) < 0.5 * CUBE_HALF))
-        # there: near its target and on the one below (the goal test's, cube by cube);
+        # there: within PLACED of its place and near its target (the goal test's threshold);
         # placed: there and let go of (a cube held there is still being carried)
-        there = (distance(cubes - targets) < DISTANCE_THRESHOLD) & fits  # (k, n)
+        there = ((distance(cubes - aims) < PLACED)
+                 & (distance(cubes - targets) < DISTANCE_THRESHOLD))  # (k, n)
         placed = there & (held[:, None] != np.arange(n))
         # the cube being worked on: the first not placed (the top one when all are)
         current = np.minimum(np.cumprod(placed, axis=1).sum(axis=1), n - 1)
@@ -194,15 +196,15 @@ class TowerEnv(RigidGymEnv):
     the cubes lay. sparse: 0 when reached, else -1; dense: minus the distance between the
     3 n-vectors, m. shaped (for on-policy learners; staged as ManiSkill's dense rewards), in
     [0, 1]: 4 k + the stages of cube k, where cube k is the first cube not placed (within
-    0.05 m of its target, on the cube below as the goal test's pair test asks, and not held;
-    the top cube when all are); a cube's stages are reach, 1 - tanh(5 d) of the pad's
-    distance to its top face's centre, until the pad holds it (or it lies placed but for the
-    grip), then carry, 2 + the mean of 1 - tanh(5 d) and 1 - tanh(20 d) of its distance d to
-    its place (cube 0's target; cube k's on cube k - 1 as that one lies); divided by 4 n; 1
-    when reached and the pad holds nothing. Placing pays: letting a cube go
-    at its target takes the reward from at most 3 to at least 4 (plus the next cube's reach),
-    so holding a cube at its target is worth less than putting it down (the top cube held on
-    the tower too: at most (4 n - 1) / 4 n, though the goal test is met), and a placed cube
+    0.02 m of its place and 0.05 m of its target, and not held; the top cube when all are).
+    Cube 0's place is its target, cube k's on cube k - 1 as that one lies. A cube's stages
+    are reach, 1 - tanh(5 d) of the pad's distance to its top face's centre, until the pad
+    holds it (or it lies placed but for the grip), then carry, 2 + the mean of 1 - tanh(5 d)
+    and 1 - tanh(20 d) of its distance d to its place; divided by 4 n; 1 when reached and the
+    pad holds nothing. Placing pays: letting a cube go at its place takes the reward from at
+    most 3 to at least 4 (plus the next cube's reach), so holding a cube at its target is
+    worth less than putting it down (the top cube held on the tower too: at most
+    (4 n - 1) / 4 n, though the goal test is met), and a placed cube
     keeps paying after the pad lets go.
 
     ## Starting state
