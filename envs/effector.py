@@ -192,9 +192,9 @@ class SuctionGripper(FloatingEffector):
         """Start an env step in every world: ``motions`` (B, 3) in [-1, 1] scale
         ``STEP_DISTANCE``; ``grips`` (B,): > 0 closes the suction, <= 0 opens it; None
         (tasks without a grip) leaves it open. An object gripped now is gripped before the
-        move, whose force limit then counts it: taken up while the pad moved off its top and
-        down, it was carried into the table (4 cm deep, and held there). One let go of is
-        released after it, with the pad's new velocity."""
+        move, whose force limit then counts it (taken up after the limit was set, as the pad
+        moves off its top and down, it would be carried into the table and held there). One
+        let go of is released after the move, with the pad's new velocity."""
         if grips is not None:
             self.close(grips)
         self.move(motions, self.held)

@@ -36,13 +36,13 @@ CUBES_RANGE = (2, 5)
 pad's reach with the top cube held under it)."""
 PLACE_STAGE = 4.0
 """The shaped reward's worth (before its division by 4 n) of each cube placed (let go of at
-its target) below the one being worked on: 1 more than carrying that cube to its target pays
+its place) below the one being worked on: 1 more than carrying that cube to its target pays
 (3), so that a cube is put down, not held."""
 PLACED = CUBE_HALF
 """m: the shaped reward counts a cube as placed within 2 cm of its place (cube 0's target,
 cube k's spot on cube k - 1), as the goal test's pair test places a cube on the one below:
-with the goal test's 5 cm, cube 0 was let go of as soon as it was within 5 cm of its target,
-and a tower built on it there missed the test."""
+with the goal test's 5 cm, a cube 0 let go of anywhere within 5 cm of its target would pay
+in full, and a tower built on it there can miss the test."""
 PLACE_SCALE = 20.0
 """1/m: the carry stage's sharp closeness, 1 - tanh(20 d), half of its worth (the other half
 the stages' 1 - tanh(5 d)): it doubles the pay for the last 2 cm to a cube's place, where a
@@ -136,7 +136,7 @@ class Tower(Task):
         top = cube.copy()
         top[:, 2] += half[rows, current]
         # its stages: reach its top face's centre (where a pad or a hand takes a cube to set
-        # it on another: reaching for its centre paid as much for a pad beside it at the
+        # it on another: a reach for its centre would pay as much for a pad beside it at the
         # table, whose grip on a side face drags the cube along the table into the one it is
         # to go on), hold it (or it lies there), carry it, in [0, 3]; 4 per cube below it,
         # all placed: placing a cube pays more than carrying it there. The carry's closeness
